@@ -1,0 +1,109 @@
+"""System packages the harness needs, found or installed, and Dr.Jit's LLVM path.
+
+Dr.Jit 1.5's LLVM backend aborts on Debian 12's default LLVM 15 ("Cannot select:
+fminimum"); Debian's ``libllvm19`` works. We never leave Dr.Jit to guess: the path is
+set explicitly in ``DRJIT_LIBLLVM_PATH`` before Dr.Jit is imported.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import shutil
+import subprocess
+import sys
+
+__all__ = ["SystemSetupError", "find_libllvm", "ensure_libllvm", "configure_drjit", "main"]
+
+#: Debian package that provides a libLLVM Dr.Jit 1.5 accepts.
+LLVM_PACKAGE = "libllvm19"
+#: Where Debian installs it, newest first; versions below 16 are refused.
+LLVM_GLOBS = (
+    "/usr/lib/x86_64-linux-gnu/libLLVM.so.19*",
+    "/usr/lib/x86_64-linux-gnu/libLLVM-19.so*",
+    "/usr/lib/aarch64-linux-gnu/libLLVM.so.19*",
+    "/usr/lib/aarch64-linux-gnu/libLLVM-19.so*",
+    "/usr/lib/llvm-19/lib/libLLVM*.so*",
+)
+INSTALL_COMMAND = f"apt-get update && apt-get install -y {LLVM_PACKAGE}"
+
+
+class SystemSetupError(RuntimeError):
+    """A system package is missing and could not be installed; the message says how."""
+
+
+def find_libllvm() -> str | None:
+    """Path of a usable libLLVM (>= 16), honouring an existing ``DRJIT_LIBLLVM_PATH``."""
+    preset = os.environ.get("DRJIT_LIBLLVM_PATH")
+    if preset and os.path.isfile(preset):
+        return preset
+    for pattern in LLVM_GLOBS:
+        hits = sorted(glob.glob(pattern))
+        if hits:
+            return hits[0]
+    return None
+
+
+def _apt_install(package: str) -> None:
+    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    install = ["apt-get", "install", "-y", "-q", "--no-install-recommends", package]
+    # A fresh machine may have no package lists; update only when the install fails.
+    if subprocess.run(install, env=env, capture_output=True).returncode == 0:
+        return
+    subprocess.run(["apt-get", "update", "-q"], env=env, check=True, capture_output=True)
+    subprocess.run(install, env=env, check=True, capture_output=True)
+
+
+def ensure_libllvm(*, install: bool = True) -> str:
+    """Find libLLVM for Dr.Jit, installing Debian's ``libllvm19`` when root and allowed.
+
+    Returns
+    -------
+    str
+        Path of the shared library.
+
+    Raises
+    ------
+    SystemSetupError
+        Not found, and not installable here; the message gives the exact command.
+    """
+    path = find_libllvm()
+    if path:
+        return path
+    can_install = install and hasattr(os, "geteuid") and os.geteuid() == 0
+    if can_install and shutil.which("apt-get"):
+        try:
+            _apt_install(LLVM_PACKAGE)
+        except subprocess.CalledProcessError as error:
+            raise SystemSetupError(
+                f"installing {LLVM_PACKAGE} failed ({error}); run: {INSTALL_COMMAND}"
+            ) from None
+        path = find_libllvm()
+        if path:
+            return path
+    raise SystemSetupError(
+        f"Dr.Jit's LLVM backend needs libLLVM >= 16 and none was found; as root run: "
+        f"{INSTALL_COMMAND}"
+    )
+
+
+def configure_drjit(*, install: bool = True) -> str:
+    """Set ``DRJIT_LIBLLVM_PATH`` explicitly (before Dr.Jit is imported); return it."""
+    path = ensure_libllvm(install=install)
+    os.environ["DRJIT_LIBLLVM_PATH"] = path
+    return path
+
+
+def main() -> int:
+    """``python -m harness.system``: install/check system packages; print what was found."""
+    try:
+        path = configure_drjit(install=True)
+    except SystemSetupError as error:
+        print(f"caustics: {error}", file=sys.stderr)
+        return 1
+    print(f"libLLVM for Dr.Jit: {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
