@@ -12,7 +12,7 @@ from pathlib import Path
 from harness.scene import SceneError
 from harness.system import SystemSetupError
 
-__all__ = ["main", "default_scene_path", "COMMAND_MODULES"]
+__all__ = ["COMMAND_MODULES", "default_scene_path", "main"]
 
 #: Modules that each provide ``register(subparsers)``; one line per command group.
 COMMAND_MODULES = (

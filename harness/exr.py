@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import OpenEXR
 
-__all__ = ["ExrError", "write_exr", "read_exr", "atomic_write_bytes"]
+__all__ = ["ExrError", "atomic_write_bytes", "read_exr", "write_exr"]
 
 
 class ExrError(ValueError):

@@ -11,7 +11,7 @@ from harness.scene import EFFECTS, SceneError, effects_of, load_scene
 from harness.scene.model import Scene
 from harness.scene.schema import describe_schema
 
-__all__ = ["register", "load_scenes"]
+__all__ = ["load_scenes", "register"]
 
 
 def load_scenes(paths: list[str]) -> list[Scene]:
@@ -67,12 +67,12 @@ def _describe(args: argparse.Namespace) -> int:
         print(f"scene {scene.name}  ({scene.source})")
         print(f"  {scene.info.description}")
         print(f"  light: {type(scene.light).kind}")
-        for i, (rec, geo) in enumerate(zip(scene.receivers, geometry.receivers)):
+        for i, (rec, geo) in enumerate(zip(scene.receivers, geometry.receivers, strict=True)):
             umin, umax, vmin, vmax = geo.extent
             print(f"  receivers[{i}]: {rec.kind}, {len(geo.mesh.positions)} vertices, "
                   f"{len(geo.mesh.faces)} triangles, (u, v) in "
                   f"[{umin:g}, {umax:g}] x [{vmin:g}, {vmax:g}]")
-        for i, (obj, geo) in enumerate(zip(scene.objects, geometry.objects)):
+        for i, (obj, geo) in enumerate(zip(scene.objects, geometry.objects, strict=True)):
             lo, hi = geo.mesh.bounds
             print(f"  objects[{i}]: {obj.kind} ({obj.material.kind}), "
                   f"{len(geo.mesh.positions)} vertices, {len(geo.mesh.faces)} triangles, "

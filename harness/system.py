@@ -13,7 +13,7 @@ import shutil
 import subprocess
 import sys
 
-__all__ = ["SystemSetupError", "find_libllvm", "ensure_libllvm", "configure_drjit", "main"]
+__all__ = ["SystemSetupError", "configure_drjit", "ensure_libllvm", "find_libllvm", "main"]
 
 #: Debian package that provides a libLLVM Dr.Jit 1.5 accepts.
 LLVM_PACKAGE = "libllvm19"
@@ -48,7 +48,7 @@ def _apt_install(package: str) -> None:
     env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
     install = ["apt-get", "install", "-y", "-q", "--no-install-recommends", package]
     # A fresh machine may have no package lists; update only when the install fails.
-    if subprocess.run(install, env=env, capture_output=True).returncode == 0:
+    if subprocess.run(install, env=env, capture_output=True, check=False).returncode == 0:
         return
     subprocess.run(["apt-get", "update", "-q"], env=env, check=True, capture_output=True)
     subprocess.run(install, env=env, check=True, capture_output=True)

@@ -31,7 +31,7 @@ from harness.scene.model import (
 )
 from harness.scene.schema import Problem, SceneError
 
-__all__ = ["ReceiverGeometry", "ObjectGeometry", "SceneGeometry", "build_geometry"]
+__all__ = ["ObjectGeometry", "ReceiverGeometry", "SceneGeometry", "build_geometry"]
 
 
 @dataclass(frozen=True, eq=False)

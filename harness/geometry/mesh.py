@@ -9,7 +9,7 @@ import numpy as np
 
 from harness.scene.model import Transform
 
-__all__ = ["TriangleMesh", "transform_matrix", "builtin_mesh_path", "load_mesh_file"]
+__all__ = ["TriangleMesh", "builtin_mesh_path", "load_mesh_file", "transform_matrix"]
 
 
 @dataclass(frozen=True, eq=False)

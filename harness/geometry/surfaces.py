@@ -13,7 +13,7 @@ from harness.scene.model import (
     WaterSurface,
 )
 
-__all__ = ["evaluate_height", "water_height", "grid_mesh_arrays"]
+__all__ = ["evaluate_height", "grid_mesh_arrays", "water_height"]
 
 
 def _unit2(v) -> np.ndarray:

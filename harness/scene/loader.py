@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import dataclasses
 import tomllib
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from harness.scene.model import Scene, Settings
 from harness.scene.schema import Problem, SceneError, build
 
-__all__ = ["load_scene", "parse_scene", "with_settings", "parse_override"]
+__all__ = ["load_scene", "parse_override", "parse_scene", "with_settings"]
 
 
 def parse_scene(text: str, *, file: str = "<string>", base_dir: Path | None = None) -> Scene:
@@ -71,7 +72,9 @@ def parse_override(item: str) -> tuple[str, Any]:
     return name.strip(), parsed
 
 
-def with_settings(scene: Scene, overrides: Mapping[str, Any], *, origin: str = "command line") -> Scene:
+def with_settings(
+    scene: Scene, overrides: Mapping[str, Any], *, origin: str = "command line"
+) -> Scene:
     """Return ``scene`` with some settings replaced, validated like the scene file.
 
     Parameters

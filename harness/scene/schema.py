@@ -27,9 +27,9 @@ from typing import Any, Literal, Union
 __all__ = [
     "Problem",
     "SceneError",
-    "spec",
     "build",
     "describe_schema",
+    "spec",
     "tag_of",
 ]
 
@@ -233,7 +233,8 @@ def _convert(value: Any, tp: Any, path: str, ctx: _Context, meta: dict) -> Any:
                     path, f"expected an array of {len(args)} numbers, got {len(value)}"
                 )
             items = [
-                _convert(v, a, f"{path}[{i}]", ctx, {}) for i, (v, a) in enumerate(zip(value, args))
+                _convert(v, a, f"{path}[{i}]", ctx, {})
+                for i, (v, a) in enumerate(zip(value, args, strict=True))
             ]
         if any(i is _INVALID for i in items):
             return _INVALID

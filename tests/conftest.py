@@ -1,0 +1,55 @@
+"""Shared fixtures: paths into the repository and a minimal valid scene."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+SCENES = REPO / "scenes"
+
+MINIMAL_SCENE = """
+[scene]
+name = "minimal"
+
+[light]
+type = "point"
+position = [0.0, 0.0, 6.0]
+intensity = [30.0, 30.0, 30.0]
+
+[[receivers]]
+type = "plane"
+center = [0.0, 0.0, 0.0]
+size = [8.0, 8.0]
+albedo = [0.5, 0.5, 0.5]
+
+[[objects]]
+type = "sphere"
+center = [0.0, 0.0, 2.0]
+radius = 1.0
+material = { type = "dielectric", ior = 1.5 }
+
+[camera]
+position = [0.0, -9.0, 7.0]
+look_at = [0.0, 0.0, 0.5]
+fov = 40.0
+resolution = [64, 64]
+"""
+
+
+@pytest.fixture
+def repo() -> Path:
+    """Repository root."""
+    return REPO
+
+
+@pytest.fixture
+def minimal_scene_text() -> str:
+    """TOML text of a small valid scene (glass sphere, point light)."""
+    return MINIMAL_SCENE
+
+
+def all_scene_files() -> list[Path]:
+    """Every committed scene file: paper scenes and hard cases."""
+    return sorted(SCENES.glob("*.toml")) + sorted((SCENES / "hard").glob("*.toml"))
