@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
-    "signed_difference",
     "absolute_difference",
-    "relative_difference",
     "false_colour",
+    "relative_difference",
+    "signed_difference",
 ]
 
 

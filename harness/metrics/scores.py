@@ -24,11 +24,11 @@ from harness.metrics.tonemap import luminance, tonemap
 
 __all__ = [
     "MetricInputError",
-    "relative_mse",
-    "peak_signal_to_noise_ratio",
-    "structural_similarity",
     "flip_error",
     "flux_ratio",
+    "peak_signal_to_noise_ratio",
+    "relative_mse",
+    "structural_similarity",
 ]
 
 RELMSE_EPSILON = 0.01

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["luminance", "white_point", "tonemap", "srgb_encode"]
+__all__ = ["luminance", "srgb_encode", "tonemap", "white_point"]
 
 #: Rec. 709 luma weights for linear RGB.
 LUMA = np.array([0.2126, 0.7152, 0.0722])
