@@ -1,0 +1,1 @@
+"""Studies: convergence of the estimators, and what accuracy costs in time."""
