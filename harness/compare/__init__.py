@@ -1,0 +1,1 @@
+"""Comparison of the caustics-mapping render against the Mitsuba reference."""
