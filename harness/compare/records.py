@@ -32,9 +32,9 @@ from harness.studies.pareto import EqualErrorSpeedup
 __all__ = [
     "METRIC_FORMULAS",
     "MetricValue",
+    "SceneComparison",
     "Table",
     "ThresholdCheck",
-    "SceneComparison",
 ]
 
 #: Human-readable formula of each metric, shown beside its value in every output.

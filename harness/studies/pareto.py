@@ -23,7 +23,7 @@ from typing import Literal
 
 import numpy as np
 
-__all__ = ["pareto_front", "EqualErrorSpeedup", "equal_error_speedup"]
+__all__ = ["EqualErrorSpeedup", "equal_error_speedup", "pareto_front"]
 
 
 def pareto_front(times, errors) -> np.ndarray:
