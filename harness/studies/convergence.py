@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["IterationStats", "iteration_stats", "LOOKUPS", "lookups_per_vertex"]
+__all__ = ["LOOKUPS", "IterationStats", "iteration_stats", "lookups_per_vertex"]
 
 #: Positions-texture lookups: for the starting estimate g(0), and per iteration.
 LOOKUPS = {"modified": (1, 1), "newton": (1, 2), "secant": (1, 1)}
