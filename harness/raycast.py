@@ -60,14 +60,14 @@ class RayHits:
         self.position = position
 
 
-class ReceiverTracer:
-    """Build once per geometry, then ``tracer(origins, directions) -> RayHits``."""
+class MeshTracer:
+    """Nearest hits against a list of meshes: ``tracer(origins, directions) -> RayHits``
+    (``RayHits.receiver`` is then the index into ``meshes``)."""
 
-    def __init__(self, geometry: SceneGeometry):
+    def __init__(self, meshes: list[TriangleMesh]):
         mi = _mitsuba()
         self._mi = mi
-        self._scenes = [_mesh_scene(mi, rec.mesh, f"receiver{i}")
-                        for i, rec in enumerate(geometry.receivers)]
+        self._scenes = [_mesh_scene(mi, mesh, f"mesh{i}") for i, mesh in enumerate(meshes)]
 
     def __call__(self, origins, directions) -> RayHits:
         """Cast rays from ``origins`` (N, 3) along ``directions`` (N, 3), metres.
@@ -91,6 +91,39 @@ class ReceiverTracer:
         return RayHits(best, index, position)
 
 
+class ReceiverTracer(MeshTracer):
+    """Build once per geometry, then ``tracer(origins, directions) -> RayHits``."""
+
+    def __init__(self, geometry: SceneGeometry):
+        super().__init__([rec.mesh for rec in geometry.receivers])
+
+
 def cast_rays(geometry: SceneGeometry, origins, directions) -> RayHits:
     """One-shot convenience: nearest receiver hit of each ray (see ``ReceiverTracer``)."""
     return ReceiverTracer(geometry)(origins, directions)
+
+
+def camera_rays(camera) -> tuple[np.ndarray, np.ndarray]:
+    """Primary rays through the pixel centres of a pinhole ``Camera``.
+
+    Returns origins and unit directions, each (H·W, 3), rows in image order (row 0
+    at the top). The field of view spans ``camera.fov_axis`` (Mitsuba's convention:
+    horizontal for ``"x"``).
+    """
+    eye = np.asarray(camera.position, np.float64)
+    forward = np.asarray(camera.look_at, np.float64) - eye
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, camera.up)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    width, height = camera.resolution
+    half = np.tan(np.radians(camera.fov) / 2)
+    aspect = width / height
+    half_x, half_y = (half, half / aspect) if camera.fov_axis == "x" else (half * aspect, half)
+    x = ((np.arange(width) + 0.5) / width * 2 - 1) * half_x
+    y = (1 - (np.arange(height) + 0.5) / height * 2) * half_y
+    gx, gy = np.meshgrid(x, y)
+    d = forward + gx[..., None] * right + gy[..., None] * up
+    d = d.reshape(-1, 3)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return np.broadcast_to(eye, d.shape).copy(), d

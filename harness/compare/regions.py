@@ -1,0 +1,50 @@
+"""Regions metrics are computed over: the caustic region and the object mask."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from harness.geometry import SceneGeometry
+from harness.metrics.tonemap import luminance
+from harness.raycast import MeshTracer, camera_rays
+from harness.scene.model import Camera
+
+__all__ = ["CAUSTIC_FRACTION", "caustic_region", "object_mask"]
+
+#: A texel is in the caustic region when the reference's luminance exceeds this
+#: fraction of its 99.5th percentile (a robust maximum that ignores fireflies).
+CAUSTIC_FRACTION = 0.1
+
+
+def caustic_region(reference: np.ndarray, *, fraction: float = CAUSTIC_FRACTION) -> np.ndarray:
+    """Boolean (H, W) mask where ``reference`` (H, W, 3) is bright enough to be caustic.
+
+    The threshold is ``fraction`` × the 99.5th percentile of the luminance; an
+    all-black reference gives an empty mask.
+    """
+    lum = luminance(reference)
+    top = float(np.percentile(lum, 99.5))
+    if top <= 0:
+        return np.zeros(lum.shape, bool)
+    return lum > fraction * top
+
+
+def object_mask(camera: Camera, geometry: SceneGeometry, *, dilate: int = 1) -> np.ndarray:
+    """Boolean (H, W) mask of camera pixels that see a caustic object.
+
+    Computed by casting the camera's primary rays against the objects' triangles and
+    dilated by ``dilate`` pixels, so pixels on the silhouette, where the two
+    renderers' rasterisation and sampling differ, are excluded too.
+    """
+    width, height = camera.resolution
+    origins, directions = camera_rays(camera)
+    hits = MeshTracer([o.mesh for o in geometry.objects])(origins, directions)
+    mask = np.isfinite(hits.distance).reshape(height, width)
+    for _ in range(dilate):
+        grown = mask.copy()
+        grown[1:] |= mask[:-1]
+        grown[:-1] |= mask[1:]
+        grown[:, 1:] |= mask[:, :-1]
+        grown[:, :-1] |= mask[:, 1:]
+        mask = grown
+    return mask

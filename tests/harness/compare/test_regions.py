@@ -1,0 +1,35 @@
+"""Region masks: caustic threshold and the camera's object mask."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from harness.compare.regions import caustic_region, object_mask
+from harness.geometry import build_geometry
+from harness.scene import load_scene
+from tests.conftest import SCENES
+
+
+def test_caustic_region_threshold():
+    ref = np.full((10, 10, 3), 0.01)
+    ref[4:6, 4:6] = 1.0
+    mask = caustic_region(ref)
+    assert mask.sum() == 4 and mask[4:6, 4:6].all()
+    assert not caustic_region(np.zeros((4, 4, 3))).any()
+
+
+def test_object_mask_covers_the_sphere():
+    """glass_sphere seen from (0, −9, 7): the unit sphere at distance √(81 + 25) m
+    subtends a half-angle asin(1/√106) = 5.57°; with a 40° horizontal field of view
+    over 64 px the disc's radius is ≈ 64 · tan(5.57°)/(2 tan 20°) ≈ 8.6 px, area
+    ≈ 233 px. Undilated mask within 15 % of that (discretisation and perspective)."""
+    scene = load_scene(SCENES / "glass_sphere.toml")
+    camera = dataclasses.replace(scene.camera, resolution=(64, 64))
+    mask = object_mask(camera, build_geometry(scene), dilate=0)
+    radius = 64 * np.tan(np.arcsin(1 / np.sqrt(106))) / (2 * np.tan(np.radians(20)))
+    assert abs(mask.sum() - np.pi * radius**2) < 0.15 * np.pi * radius**2
+    _, cols = np.nonzero(mask)
+    assert abs(cols.mean() - 31.5) < 1.0  # centred horizontally (sphere on the axis plane)
+    assert object_mask(camera, build_geometry(scene), dilate=1).sum() > mask.sum()
