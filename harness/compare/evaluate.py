@@ -1,0 +1,115 @@
+"""Score one view (camera image or receiver map) of the real-time render.
+
+Each metric of the caustics-mapping image against the reference is paired with the
+same metric of an *independent* reference (other seeds) against the reference: the
+noise floor, the error that reference noise alone produces. An error near its floor
+is not the method's.
+
+Exposure is fixed per scene from the reference alone: the tone curve's white point
+is the reference's 99th-percentile luminance w, and HDR-FLIP spans the exposures
+[−log2 w − 3, −log2 w + 3] stops, so that every configuration of a sweep is scored
+on the same scale.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from harness.compare.records import MetricValue
+from harness.metrics import (
+    MetricInputError,
+    flip_error,
+    flux_ratio,
+    peak_signal_to_noise_ratio,
+    relative_mse,
+    signed_difference,
+    structural_similarity,
+    white_point,
+)
+
+__all__ = ["Exposure", "exposure_for", "score_view", "score_value"]
+
+FLIP_STOPS = 3.0
+
+
+@dataclass(frozen=True)
+class Exposure:
+    """Fixed per-scene exposure: tone-curve white and FLIP's exposure range (stops)."""
+
+    white: float
+    flip_start: float
+    flip_stop: float
+
+
+def exposure_for(reference: np.ndarray, *, mask: np.ndarray | None = None) -> Exposure:
+    """Exposure derived from the reference only (see the module docstring)."""
+    white = white_point(reference, mask=mask, percentile=99.0)
+    centre = -np.log2(white)
+    return Exposure(white, centre - FLIP_STOPS, centre + FLIP_STOPS)
+
+
+def score_value(metric: str, test, reference, *, mask, exposure: Exposure) -> float:
+    """One metric of ``test`` against ``reference`` over ``mask``; NaN when undefined
+    (e.g. PSNR of a black region, or a flux ratio where the reference has no energy)."""
+    try:
+        if metric == "relmse":
+            return relative_mse(test, reference, mask=mask)
+        if metric == "relmse_trimmed":
+            return relative_mse(test, reference, mask=mask, trim=0.001)
+        if metric == "psnr":
+            return peak_signal_to_noise_ratio(test, reference, mask=mask)
+        if metric == "ssim":
+            return structural_similarity(test, reference, white=exposure.white, mask=mask)
+        if metric == "flip":
+            return flip_error(test, reference, start_exposure=exposure.flip_start,
+                              stop_exposure=exposure.flip_stop, mask=mask)
+        if metric == "flux_ratio":
+            return flux_ratio(test, reference, mask=mask)
+    except MetricInputError:
+        return float("nan")
+    raise KeyError(f"unknown metric {metric!r}")
+
+
+METRICS = ("relmse", "relmse_trimmed", "psnr", "ssim", "flip", "flux_ratio")
+
+
+def score_view(view: str, test, reference, independent, *, regions: dict[str, np.ndarray],
+               exposure: Exposure) -> tuple[list[MetricValue], dict[str, np.ndarray]]:
+    """All metrics of one view over each region, with noise floors, and the maps.
+
+    Parameters
+    ----------
+    view
+        ``camera`` or ``receiver<i>``.
+    test, reference, independent
+        (H, W, 3) linear images: caustics mapping, reference mean, and an independent
+        reference of other seeds (``None`` skips the noise floor).
+    regions
+        Region name to boolean (H, W) mask; empty masks are skipped.
+
+    Returns
+    -------
+    values, maps
+        The metric values, and ``{"<view>/signed", "<view>/ssim", "<view>/flip"}``
+        maps over the full image.
+    """
+    values = []
+    for region, mask in regions.items():
+        if not np.asarray(mask).any():
+            continue
+        for metric in METRICS:
+            value = score_value(metric, test, reference, mask=mask, exposure=exposure)
+            floor = None
+            if independent is not None:
+                floor = score_value(metric, independent, reference, mask=mask,
+                                    exposure=exposure)
+            values.append(MetricValue(view, region, metric, value, floor))
+    _, ssim_map = structural_similarity(test, reference, white=exposure.white, return_map=True)
+    _, flip_map = flip_error(test, reference, start_exposure=exposure.flip_start,
+                             stop_exposure=exposure.flip_stop, return_map=True)
+    maps = {f"{view}/signed": signed_difference(test, reference).astype(np.float32),
+            f"{view}/ssim": ssim_map.astype(np.float32),
+            f"{view}/flip": flip_map.astype(np.float32)}
+    return values, maps
