@@ -29,7 +29,7 @@ from harness.metrics import (
     white_point,
 )
 
-__all__ = ["Exposure", "exposure_for", "score_view", "score_value"]
+__all__ = ["Exposure", "exposure_for", "score_value", "score_view"]
 
 FLIP_STOPS = 3.0
 
