@@ -1,0 +1,84 @@
+"""Write a comparison's data files: metrics.json, CSV tables, EXR originals.
+
+All writes are atomic (temporary file, then rename), so an interrupted run never
+leaves a half-written file for the report or a later reader.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from harness.compare.records import METRIC_FORMULAS, SceneComparison, Table
+from harness.exr import atomic_write_bytes, write_exr
+
+__all__ = ["write_json", "write_table", "comparison_json", "write_comparison"]
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        return _jsonable(value.item())
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    return value
+
+
+def write_json(path: str | Path, data: Any) -> None:
+    """JSON with NaN as null and ±inf as strings (strict JSON), written atomically."""
+    text = json.dumps(_jsonable(data), indent=2, allow_nan=False)
+    atomic_write_bytes(path, (text + "\n").encode("utf-8"))
+
+
+def write_table(path: str | Path, table: Table) -> None:
+    """A :class:`Table` as CSV, written atomically."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(table.columns)
+    writer.writerows(table.rows)
+    atomic_write_bytes(path, buffer.getvalue().encode("utf-8"))
+
+
+def comparison_json(comparison: SceneComparison) -> dict[str, Any]:
+    """The JSON form of a comparison (everything but the images)."""
+    return {
+        "scene": {"name": comparison.name, "description": comparison.description,
+                  "source": comparison.source, "effects": list(comparison.effects)},
+        "settings": comparison.settings,
+        "formulas": METRIC_FORMULAS,
+        "metrics": [asdict(m) for m in comparison.metrics],
+        "exposure": comparison.exposure,
+        "speedup": asdict(comparison.speedup) if comparison.speedup else None,
+        "claims": comparison.claims,
+        "thresholds": [asdict(t) for t in comparison.thresholds],
+        "stability": comparison.stability,
+        "provenance": comparison.provenance,
+        "files": comparison.files,
+    }
+
+
+def write_comparison(scene_dir: str | Path, comparison: SceneComparison) -> None:
+    """Write metrics.json, convergence.csv, cost_accuracy.csv and the EXR originals
+    named in ``comparison.files`` (keys ``<view>/<kind>`` of ``comparison.images``)."""
+    scene_dir = Path(scene_dir)
+    for key, name in comparison.files.items():
+        image = comparison.images[key]
+        layer = image if image.ndim == 3 else image[..., None].repeat(3, axis=2)
+        write_exr(scene_dir / name, {"RGB": layer})
+    if comparison.convergence is not None:
+        write_table(scene_dir / "convergence.csv", comparison.convergence)
+    if comparison.cost is not None:
+        write_table(scene_dir / "cost_accuracy.csv", comparison.cost)
+    write_json(scene_dir / "metrics.json", comparison_json(comparison))
