@@ -19,7 +19,7 @@ import numpy as np
 from harness.compare.records import METRIC_FORMULAS, SceneComparison, Table
 from harness.exr import atomic_write_bytes, write_exr
 
-__all__ = ["write_json", "write_table", "comparison_json", "write_comparison"]
+__all__ = ["comparison_json", "write_comparison", "write_json", "write_table"]
 
 
 def _jsonable(value: Any) -> Any:
