@@ -135,7 +135,8 @@ class PhotonTracer:
         self.scene = scene
         self.geometry = geometry or build_geometry(scene)
         self.resolution = tuple(resolution or scene.settings.receiver_map)
-        self.extents = [tuple(e) for e in (extents or [r.extent for r in self.geometry.receivers])]
+        extents = extents or [r.extent for r in self.geometry.receivers]
+        self.extents = [tuple(float(x) for x in e) for e in extents]
         self.effects = effects_of(scene)
         self.all_paths = scene.settings.all_specular_paths
         dispersion = "dispersion" in self.effects
