@@ -10,7 +10,9 @@ the image holds the same light paths as the photon tracer's maps (the
 Russian roulette is disabled (rr_depth > max_depth).
 
 Limits, recorded in the result's metadata: specular objects seen directly are
-black (ptracer cannot connect through a delta BSDF to the pinhole); ``shadows =
+black, and so is anything seen only through one, e.g. a pool floor under the
+water surface (ptracer cannot connect through a delta BSDF to the pinhole; the
+receiver maps are unaffected); ``shadows =
 false`` cannot be expressed (objects always occlude); absorption applies on
 closed objects only (see :mod:`.bsdf`).
 """
@@ -30,6 +32,8 @@ __all__ = ["CAMERA_LIMITS", "camera_max_depth", "render_camera"]
 
 CAMERA_LIMITS = (
     "specular objects seen directly render black (ptracer)",
+    "receivers seen through a specular surface (a pool floor under water) render black: "
+    "ptracer cannot connect a diffuse vertex to the pinhole through a delta BSDF",
     "objects always occlude direct light (shadows=false not expressible)",
     "absorption only inside closed objects",
 )
