@@ -17,6 +17,7 @@ __all__ = ["COMMAND_MODULES", "default_scene_path", "main"]
 #: Modules that each provide ``register(subparsers)``; one line per command group.
 COMMAND_MODULES = (
     "harness.scene_commands",
+    "renderers.mitsuba.cli",
 )
 
 

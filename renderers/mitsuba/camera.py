@@ -1,0 +1,82 @@
+"""Camera image by Mitsuba's particle tracer (``ptracer``).
+
+ptracer traces light paths from the emitter and connects each diffuse vertex to
+the camera, so it renders light-specular-diffuse-camera paths that ``path``
+cannot with a point light. ``max_depth`` counts path segments: L D E is 2, and a
+chain of k specular events before the receiver needs k + 2; we use the longest
+chain the effects name (MAX_SPECULAR_EVENTS + 2 in all-paths mode), no more, so
+the image holds the same light paths as the photon tracer's maps (the
+``chain_dielectric`` BSDF makes TIR absorb and Fresnel optional in the same way).
+Russian roulette is disabled (rr_depth > max_depth).
+
+Limits, recorded in the result's metadata: specular objects seen directly are
+black, and so is anything seen only through one, e.g. a pool floor under the
+water surface (ptracer cannot connect through a delta BSDF to the pinhole; the
+receiver maps are unaffected); ``shadows =
+false`` cannot be expressed (objects always occlude); absorption applies on
+closed objects only (see :mod:`.bsdf`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from harness.geometry import SceneGeometry, build_geometry
+from harness.scene import effects_of, event_chain
+from harness.scene.model import Scene
+from renderers.mitsuba import _mi
+from renderers.mitsuba.exporter import export_scene, sensor_dict
+from renderers.mitsuba.photons import MAX_SPECULAR_EVENTS
+
+__all__ = ["CAMERA_LIMITS", "camera_max_depth", "render_camera"]
+
+CAMERA_LIMITS = (
+    "specular objects seen directly render black (ptracer)",
+    "receivers seen through a specular surface (a pool floor under water) render black: "
+    "ptracer cannot connect a diffuse vertex to the pinhole through a delta BSDF",
+    "objects always occlude direct light (shadows=false not expressible)",
+    "absorption only inside closed objects",
+)
+
+
+def camera_max_depth(scene: Scene) -> int:
+    """ptracer ``max_depth``: longest counted specular chain + 2 (light and camera)."""
+    if scene.settings.all_specular_paths:
+        return MAX_SPECULAR_EVENTS + 2
+    longest = max([len(event_chain(o).split()) - 2 for o in scene.objects if event_chain(o)]
+                  or [0])
+    return longest + 2
+
+
+def render_camera(scene: Scene, *, spp: int, seed: int, sensor: dict | None = None,
+                  geometry: SceneGeometry | None = None) -> np.ndarray:
+    """One seed of the ptracer camera image.
+
+    Parameters
+    ----------
+    spp
+        Particles per pixel (ptracer traces ``spp * W * H`` light paths).
+    sensor
+        A Mitsuba sensor dict; default the scene camera (:func:`.exporter.sensor_dict`).
+
+    Returns
+    -------
+    ndarray, (H, W, 3), float32
+        Linear radiance in W m^-2 sr^-1, row 0 at the top of the image.
+    """
+    mi, _, _ = _mi.load()
+    geometry = geometry or build_geometry(scene)
+    depth = camera_max_depth(scene)
+    integrator = {"type": "ptracer", "max_depth": depth, "rr_depth": depth + 1}
+    channels = [0, 1, 2] if "dispersion" in effects_of(scene) else [None]
+    image = None
+    for c in channels:
+        exported = export_scene(
+            scene, geometry=geometry, channel=c,
+            tir_reflects=scene.settings.all_specular_paths,
+            sensor=sensor or sensor_dict(scene.camera, spp=spp), integrator=integrator,
+        )
+        pass_seed = seed * 3 + (0 if c is None else c)
+        out = np.asarray(mi.render(exported.scene, spp=spp, seed=pass_seed), dtype=np.float64)
+        image = out if image is None else image + out
+    return image[..., :3].astype(np.float32)

@@ -1,0 +1,176 @@
+"""Where photons leave the light: focused, unbiased emission sampling.
+
+Only photons that reach a caustic object (or, for the direct term, a receiver)
+can contribute, so directions are drawn from a mixture over *targets*, one per
+bounding sphere of those shapes, instead of the light's whole emission:
+
+* point and spot lights: a direction uniform in the cone that subtends target j,
+  pdf_j(w) = 1[w in cone j] / Omega_j with Omega_j = 2 pi (1 - cos theta_j);
+  the photon's weight is I(w) / pdf(w) with the mixture pdf
+  pdf(w) = sum_j q_j pdf_j(w), so overlapping cones stay unbiased;
+* directional lights: a point uniform in the disk that target j's bounding sphere
+  casts on a plane perpendicular to the light, pdf_j = 1[in disk j] / (pi r_j^2)
+  (area measure), weight E0 / pdf;
+* area lights: a point uniform on the rectangle and a cosine-weighted direction;
+  each photon carries the emitter's total flux pi * I (Lambertian: Phi = pi L A,
+  L = I / A), no focusing.
+
+A photon's weight is "flux times N": the caller divides by the photon count N.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from harness.geometry import TriangleMesh
+from harness.scene.model import AreaLight, DirectionalLight, PointLight, SpotLight
+from renderers.mitsuba import _mi
+from renderers.mitsuba.exporter import area_light_frame
+
+__all__ = ["Target", "bounding_sphere", "sample_photons"]
+
+#: Share of photons aimed at caustic objects when the direct term is also sampled
+#: (the caustic region is where the reference must be least noisy).
+OBJECT_SHARE = 0.75
+
+
+@dataclass(frozen=True)
+class Target:
+    """A bounding sphere photons are aimed at: centre (m), radius (m), group."""
+
+    center: tuple[float, float, float]
+    radius: float
+    group: str  # "object" or "receiver"
+
+
+def bounding_sphere(mesh: TriangleMesh, group: str) -> Target:
+    """Sphere around the mesh's bounding-box centre holding every vertex (+0.1 %)."""
+    p = mesh.positions.astype(np.float64)
+    center = (p.min(axis=0) + p.max(axis=0)) / 2
+    radius = float(np.sqrt(((p - center) ** 2).sum(axis=1).max())) * 1.001 + 1e-6
+    return Target(tuple(center.tolist()), radius, group)
+
+
+def _mixture(sizes: list[float], groups: list[str]) -> np.ndarray:
+    """q_j: groups split OBJECT_SHARE / rest; within a group proportional to size."""
+    sizes = np.asarray(sizes, float)
+    groups = np.asarray(groups)
+    has_obj, has_rec = (groups == "object").any(), (groups == "receiver").any()
+    share = {"object": OBJECT_SHARE if has_rec else 1.0,
+             "receiver": 1.0 - OBJECT_SHARE if has_obj else 1.0}
+    q = np.zeros(len(sizes))
+    for g in ("object", "receiver"):
+        sel = groups == g
+        if sel.any():
+            q[sel] = share[g] * sizes[sel] / sizes[sel].sum()
+    return q
+
+
+def _choose(dr, mi, u, q):
+    """Index j with probability q_j from one uniform number (python-unrolled)."""
+    index = mi.UInt32(0)
+    cdf = np.cumsum(q)[:-1]
+    for c in cdf:
+        index += mi.UInt32(dr.select(u >= float(c), 1, 0))
+    return index
+
+
+def _pick(dr, index, values, cls):
+    """Per-lane select of constant ``values[index]`` (few targets: unrolled)."""
+    out = cls(values[0])
+    for j in range(1, len(values)):
+        out = dr.select(index == j, cls(values[j]), out)
+    return out
+
+
+def spot_falloff(dr, mi, light: SpotLight, cos_theta):
+    """Mitsuba's spot profile: 1 inside beam_width, linear in angle to the cutoff."""
+    cutoff = np.radians(light.cutoff_angle)
+    beam = np.radians(light.beam_width if light.beam_width is not None else light.cutoff_angle)
+    angle = dr.acos(dr.clip(cos_theta, -1.0, 1.0))
+    ramp = (cutoff - angle) / max(cutoff - beam, 1e-12)
+    value = dr.select(angle <= beam, 1.0, ramp)
+    return dr.select(angle < cutoff, value, 0.0)
+
+
+def sample_photons(light, targets: list[Target], rng, scene_center, scene_radius):
+    """Draw one photon per lane.
+
+    Returns
+    -------
+    ray : mi.Ray3f
+    weight : mi.Color3f
+        Flux times N (W), per channel, before the channel mask.
+    """
+    mi, dr, _ = _mi.load()
+    u0, u1, u2 = rng.next_float32(), rng.next_float32(), rng.next_float32()
+    if isinstance(light, AreaLight):
+        m = area_light_frame(light)
+        local = mi.Point2f(2 * u1 - 1, 2 * u2 - 1)
+        origin = mi.Point3f(*[float(m[i, 3]) + float(m[i, 0]) * local.x + float(m[i, 1]) * local.y
+                              for i in range(3)])
+        frame = mi.Frame3f(mi.Vector3f(*map(float, m[:3, 2])))
+        d = frame.to_world(mi.warp.square_to_cosine_hemisphere(
+            mi.Point2f(u0, rng.next_float32())))
+        weight = mi.Color3f(*map(float, np.pi * np.asarray(light.intensity, float)))
+        return mi.Ray3f(origin, d), weight
+
+    if isinstance(light, DirectionalLight):
+        w = np.asarray(light.direction, float)
+        w /= np.linalg.norm(w)
+        frame = mi.Frame3f(mi.Vector3f(*map(float, w)))
+        areas = [np.pi * t.radius**2 for t in targets]
+        q = _mixture(areas, [t.group for t in targets])
+        j = _choose(dr, mi, u0, q)
+        centers = [mi.Point3f(*t.center) for t in targets]
+        center = centers[0]
+        for k in range(1, len(targets)):
+            center = dr.select(j == k, centers[k], center)
+        radius = _pick(dr, j, [t.radius for t in targets], mi.Float)
+        disk = mi.warp.square_to_uniform_disk_concentric(mi.Point2f(u1, u2)) * radius
+        x = center + frame.s * disk.x + frame.t * disk.y
+        back = dr.dot(x - mi.Point3f(*scene_center), frame.n) + 2.0 * scene_radius
+        origin = x - frame.n * back
+        pdf = mi.Float(0.0)
+        for k, t in enumerate(targets):
+            rel = origin - mi.Point3f(*t.center)
+            perp = rel - frame.n * dr.dot(rel, frame.n)
+            pdf += dr.select(dr.squared_norm(perp) <= t.radius**2, q[k] / areas[k], 0.0)
+        weight = mi.Color3f(*light.irradiance) / pdf
+        return mi.Ray3f(origin, frame.n), weight
+
+    if not isinstance(light, (PointLight, SpotLight)):
+        raise TypeError(f"unknown light {light!r}")
+    p = np.asarray(light.position, float)
+    axes, cosines, omegas = [], [], []
+    for t in targets:
+        rel = np.asarray(t.center) - p
+        dist = float(np.linalg.norm(rel))
+        if dist <= t.radius:  # light inside the bounding sphere: whole sphere
+            axes.append(np.array([0.0, 0.0, 1.0]))
+            cosines.append(-1.0)
+        else:
+            axes.append(rel / dist)
+            cosines.append(float(np.sqrt(1.0 - (t.radius / dist) ** 2)))
+        omegas.append(2 * np.pi * (1 - cosines[-1]))
+    q = _mixture(omegas, [t.group for t in targets])
+    j = _choose(dr, mi, u0, q)
+    axis = mi.Vector3f(*map(float, axes[0]))
+    for k in range(1, len(targets)):
+        axis = dr.select(j == k, mi.Vector3f(*map(float, axes[k])), axis)
+    cos_max = _pick(dr, j, cosines, mi.Float)
+    local = mi.warp.square_to_uniform_cone(mi.Point2f(u1, u2), cos_max)
+    d = mi.Frame3f(axis).to_world(local)
+    pdf = mi.Float(0.0)
+    for k in range(len(targets)):
+        inside = dr.dot(d, mi.Vector3f(*map(float, axes[k]))) >= cosines[k]
+        pdf += dr.select(inside, q[k] / omegas[k], 0.0)
+    intensity = mi.Color3f(*light.intensity)
+    if isinstance(light, SpotLight):
+        axis_s = np.asarray(light.direction, float)
+        axis_s /= np.linalg.norm(axis_s)
+        intensity *= spot_falloff(dr, mi, light, dr.dot(d, mi.Vector3f(*map(float, axis_s))))
+    weight = intensity / dr.maximum(pdf, 1e-30)
+    return mi.Ray3f(mi.Point3f(*map(float, p)), d), weight

@@ -1,0 +1,327 @@
+"""Event-filtered photon tracer on Mitsuba's ray tracing, written in Dr.Jit.
+
+Photons leave the light (:mod:`.emission`), are traced through the caustic
+objects with ``scene.ray_intersect`` and our own specular events, and are
+``scatter_reduce``-d into each receiver's (u, v) grid when they reach its front
+side. Only the event chains the scene's effects name are counted:
+
+=====================  ===========  ===========================================
+object                 chain        rule
+=====================  ===========  ===========================================
+closed dielectric      L T T D      exactly two transmissions, same object
+open water surface     L T D        exactly one transmission
+conductor              L R D        exactly one reflection
+direct light           L D          when ``scene.direct_lighting``; through the
+                                    objects' shadow when ``shadows`` is on,
+                                    traced past them (receivers only) when off
+=====================  ===========  ===========================================
+
+``settings.all_specular_paths`` counts every L S+ D path (up to
+:data:`MAX_SPECULAR_EVENTS` events, any objects) instead.
+
+Specular events
+---------------
+Refraction uses the shading normal n (the meshes' vertex normals, as the GPU
+renderer does), oriented against the incoming direction d:
+t = eta d + (eta cos_i - sqrt(k)) n,  k = 1 - eta^2 (1 - cos_i^2), eta = n1 / n2.
+k < 0 is total internal reflection: without Fresnel the photon has no
+transmitted branch and is **dropped** in chain mode (reflects with weight one in
+all-paths mode). With the ``fresnel`` effect, the photon reflects with
+probability F (exact dielectric Fresnel, ``mi.fresnel``) and keeps weight one; in
+chain mode a reflection breaks the chain and drops it. Conductors reflect with
+weight equal to their constant reflectance. A diffuse object absorbs.
+Beer-Lambert: every segment travelled inside a dielectric (after a transmission
+into it, until the next surface: for a water surface, down to the floor) scales
+the weight by exp(-sigma d) per channel.
+
+Irradiance: a photon of weight w (flux x N) landing in texel i of area
+A_uv (in (u, v) units) on a surface whose area per unit (u, v) is
+J = |dp/du x dp/dv| adds w / (N A_uv J) W/m^2. Planes have J = 1.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from harness.geometry import SceneGeometry, build_geometry
+from harness.scene import effects_of, event_chain
+from harness.scene.model import (
+    ConductorMaterial,
+    DielectricMaterial,
+    Scene,
+)
+from renderers.mitsuba import _mi
+from renderers.mitsuba.emission import Target, bounding_sphere, sample_photons
+from renderers.mitsuba.exporter import ExportedScene, channel_mask, export_scene
+
+__all__ = [
+    "MAX_SPECULAR_EVENTS",
+    "PhotonSums",
+    "PhotonTracer",
+    "event_chains_counted",
+    "trace_receiver_maps",
+]
+
+#: Longest specular chain followed when all L S+ D paths are counted.
+MAX_SPECULAR_EVENTS = 8
+#: Photons per kernel launch (memory ~ 100 B per lane).
+DEFAULT_BATCH = 1 << 20
+
+_T, _R = 1, 2  # event codes: code = code * 3 + event
+
+
+def _chain_code(chain: str) -> int:
+    code = 0
+    for event in chain.split()[1:-1]:
+        code = code * 3 + (_T if event == "T" else _R)
+    return code
+
+
+def event_chains_counted(scene: Scene) -> list[str]:
+    """Human-readable list of the light paths the photon tracer counts."""
+    chains = []
+    if scene.info.direct_lighting:
+        chains.append("L D" if scene.info.shadows else "L D (unshadowed)")
+    if scene.settings.all_specular_paths:
+        chains.append(f"L S+ D (any objects, up to {MAX_SPECULAR_EVENTS} events)")
+    else:
+        for i, obj in enumerate(scene.objects):
+            if event_chain(obj):
+                chains.append(f"{event_chain(obj)} (objects[{i}])")
+    return chains
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class PhotonSums:
+    """Unnormalised sums of one or more batches (divide by ``photons``).
+
+    Attributes
+    ----------
+    total, caustic : list of ndarray (H, W, 3) float64
+        Per receiver, sum of w / (A_uv J) over counted photons: everything counted,
+        and only the specular chains (no direct light).
+    photons : int
+        Photons emitted (per channel pass).
+    """
+
+    total: list
+    caustic: list
+    photons: int
+
+
+class PhotonTracer:
+    """A scene prepared for photon tracing (exported once, traced many times).
+
+    Parameters
+    ----------
+    scene : Scene
+    geometry : SceneGeometry, optional
+    resolution : (W, H), optional
+        Map size per receiver; default ``settings.receiver_map``.
+    extents : list of (umin, umax, vmin, vmax), optional
+        Per receiver; default the receiver's own (u, v) extent.
+    """
+
+    def __init__(self, scene: Scene, *, geometry: SceneGeometry | None = None,
+                 resolution: tuple[int, int] | None = None,
+                 extents: list | None = None) -> None:
+        _, _, variant = _mi.load()
+        if not variant.startswith(("llvm", "cuda")):
+            raise _mi.MitsubaError(
+                f"the photon tracer needs a vectorised Mitsuba variant, got {variant}"
+            )
+        self.scene = scene
+        self.geometry = geometry or build_geometry(scene)
+        self.resolution = tuple(resolution or scene.settings.receiver_map)
+        extents = extents or [r.extent for r in self.geometry.receivers]
+        self.extents = [tuple(float(x) for x in e) for e in extents]
+        self.effects = effects_of(scene)
+        self.all_paths = scene.settings.all_specular_paths
+        dispersion = "dispersion" in self.effects
+        self.channels = [0, 1, 2] if dispersion else [None]
+        self.exported: dict = {
+            c: export_scene(scene, geometry=self.geometry, channel=c) for c in self.channels
+        }
+        info = scene.info
+        self.direct_full = info.direct_lighting and info.shadows
+        self.direct_unshadowed = info.direct_lighting and not info.shadows
+        self.receivers_only: ExportedScene | None = (
+            export_scene(scene, geometry=self.geometry, include_objects=False)
+            if self.direct_unshadowed else None
+        )
+        targets = [bounding_sphere(o.mesh, "object") for o in self.geometry.objects]
+        if info.direct_lighting:
+            targets += [bounding_sphere(r.mesh, "receiver") for r in self.geometry.receivers]
+        self.targets: list[Target] = targets
+        allp = np.concatenate([r.mesh.positions for r in self.geometry.receivers]
+                              + [o.mesh.positions for o in self.geometry.objects]).astype(float)
+        lo, hi = allp.min(axis=0), allp.max(axis=0)
+        self.scene_center = tuple(((lo + hi) / 2).tolist())
+        self.scene_radius = float(np.linalg.norm(hi - lo) / 2) + 1e-3
+        chains = [_chain_code(event_chain(o)) if event_chain(o) else -1 for o in scene.objects]
+        self.chain_codes = chains
+        self.max_events = MAX_SPECULAR_EVENTS if self.all_paths else max(
+            [len(event_chain(o).split()) - 2 for o in scene.objects if event_chain(o)] or [0]
+        )
+
+    # ----------------------------------------------------------------- tracing
+    def trace(self, photons: int, *, seed: int, stream: int = 0,
+              batch: int = DEFAULT_BATCH) -> PhotonSums:
+        """Trace ``photons`` photons (rounded up to whole batches) per channel pass.
+
+        ``seed`` and ``stream`` select independent random sequences: (seed, stream)
+        pairs never share a PCG32 sequence.
+        """
+        mi, dr, _ = _mi.load()
+        w, h = self.resolution
+        n_rec = len(self.extents)
+        total = [dr.zeros(mi.Float, w * h * 3) for _ in range(n_rec)]
+        caustic = [dr.zeros(mi.Float, w * h * 3) for _ in range(n_rec)]
+        batch = max(1, min(batch, photons))
+        launches = -(-photons // batch)
+        for c in self.channels:
+            for launch in range(launches):
+                key = ((seed * 1_000_003 + stream) * 7 + (0 if c is None else c + 1)) \
+                    * 1_000_003 + launch
+                self._launch(batch, key, c, total, caustic)
+                dr.eval(total, caustic)
+        shape = (h, w, 3)
+        return PhotonSums(
+            total=[np.asarray(t, dtype=np.float64).reshape(shape) for t in total],
+            caustic=[np.asarray(t, dtype=np.float64).reshape(shape) for t in caustic],
+            photons=launches * batch,
+        )
+
+    def _launch(self, n: int, key: int, channel, total, caustic) -> None:
+        mi, dr, _ = _mi.load()
+        # Opaque seed: one compiled kernel serves every launch.
+        state = dr.opaque(mi.UInt64, np.uint64(key & 0xFFFFFFFFFFFFFFFF))
+        rng = mi.PCG32(n, state, dr.arange(mi.UInt64, n))
+        ray, weight = sample_photons(self.scene.light, self.targets, rng,
+                                     self.scene_center, self.scene_radius)
+        weight *= mi.Color3f(*map(float, channel_mask(channel)))
+        exported = self.exported[channel]
+        if self.direct_unshadowed:
+            si = self.receivers_only.scene.ray_intersect(ray)
+            self._deposit(si, ray.d, weight, si.is_valid(),
+                          receiver_ids=self.receivers_only.receiver_ids, total=total, caustic=None)
+        self._trace_chain(exported, ray, weight, rng=rng, channel=channel, total=total,
+                          caustic=caustic)
+
+    def _trace_chain(self, exported: ExportedScene, ray, weight, *, rng, channel,
+                     total, caustic) -> None:
+        mi, dr, _ = _mi.load()
+        active = mi.Bool(True)
+        code = mi.UInt32(0)
+        first = mi.UInt32(0)
+        mixed = mi.Bool(False)
+        sigma = mi.Color3f(0.0)
+        objs = self.geometry.objects
+        for depth in range(self.max_events + 1):
+            si = exported.scene.ray_intersect(ray, active)
+            hit = active & si.is_valid()
+            sid = dr.reinterpret_array(mi.UInt32, si.shape)
+            weight *= dr.exp(-sigma * dr.select(hit, si.t, 0.0))
+            # Which photons reaching a receiver now are counted.
+            if self.all_paths:
+                ok = code != 0
+            else:
+                ok = mi.Bool(False)
+                for j, oid in enumerate(exported.object_ids):
+                    if self.chain_codes[j] > 0:
+                        ok |= (first == oid) & (code == self.chain_codes[j])
+                ok &= ~mixed
+            if self.direct_full:
+                ok |= code == 0
+            self._deposit(si, ray.d, weight, hit & ok, receiver_ids=exported.receiver_ids,
+                          total=total, caustic=caustic if depth > 0 else None)
+            if depth == self.max_events:
+                break
+            is_obj = mi.Bool(False)
+            for oid in exported.object_ids:
+                is_obj |= sid == oid
+            active = hit & is_obj
+            # Per-lane material of the object hit.
+            kind = mi.UInt32(0)  # 0 absorb (diffuse), 1 dielectric, 2 conductor
+            eta = mi.Float(1.0)
+            obj_sigma = mi.Color3f(0.0)
+            refl = mi.Color3f(1.0)
+            fres = mi.Bool(False)
+            for j, oid in enumerate(exported.object_ids):
+                m = objs[j].material
+                here = sid == oid
+                if isinstance(m, DielectricMaterial):
+                    kind = dr.select(here, 1, kind)
+                    eta = dr.select(here, float(m.iors[0 if channel is None else channel]), eta)
+                    obj_sigma = dr.select(here, mi.Color3f(*map(float, m.absorption)), obj_sigma)
+                    fres = dr.select(here, bool(m.fresnel), fres)
+                elif isinstance(m, ConductorMaterial):
+                    kind = dr.select(here, 2, kind)
+                    refl = dr.select(here, mi.Color3f(*map(float, m.reflectance)), refl)
+            active &= kind != 0
+            d = ray.d
+            n = si.sh_frame.n
+            entering = dr.dot(d, si.n) < 0  # geometric normal: which side we come from
+            nf = dr.select(dr.dot(d, n) < 0, n, -n)  # shading normal facing d's origin
+            cos_i = dr.clip(-dr.dot(d, nf), 0.0, 1.0)
+            rel = dr.select(entering, dr.rcp(eta), eta)  # n1 / n2
+            k = 1.0 - rel * rel * (1.0 - cos_i * cos_i)
+            tir = k < 0
+            t_dir = dr.normalize(rel * d + (rel * cos_i - dr.sqrt(dr.maximum(k, 0.0))) * nf)
+            r_dir = dr.normalize(d + 2.0 * cos_i * nf)
+            f, _, _, _ = mi.fresnel(dr.select(entering, cos_i, -cos_i), eta)
+            u = rng.next_float32()
+            dielectric = kind == 1
+            reflect = dr.select(fres, u < f, tir & self.all_paths)
+            drop = dielectric & ~fres & tir & (not self.all_paths)
+            reflect = dr.select(dielectric, reflect, True)
+            weight = dr.select(kind == 2, weight * refl, weight)
+            new_d = dr.select(reflect, r_dir, t_dir)
+            # Medium after the event: reflection keeps it; transmission enters the
+            # object's medium or leaves to vacuum (objects do not nest).
+            sigma = dr.select(reflect, sigma, dr.select(entering, obj_sigma, mi.Color3f(0.0)))
+            event = dr.select(reflect, mi.UInt32(_R), mi.UInt32(_T))
+            first = dr.select(depth == 0, sid, first)
+            mixed |= sid != first
+            code = code * 3 + event
+            active &= ~drop
+            ray = si.spawn_ray(new_d)
+
+    def _deposit(self, si, d, weight, mask, *, receiver_ids, total, caustic) -> None:
+        """scatter_reduce the photons of ``mask`` into the texel their (u, v) falls in."""
+        mi, dr, _ = _mi.load()
+        w, h = self.resolution
+        sid = dr.reinterpret_array(mi.UInt32, si.shape)
+        front = dr.dot(d, si.sh_frame.n) < 0  # Lambertian receivers are one-sided
+        jac = dr.norm(dr.cross(si.dp_du, si.dp_dv))
+        for r, rid in enumerate(receiver_ids):
+            umin, umax, vmin, vmax = self.extents[r]
+            texel_area = (umax - umin) * (vmax - vmin) / (w * h)
+            fu = (si.uv.x - umin) / (umax - umin) * w
+            fv = (si.uv.y - vmin) / (vmax - vmin) * h
+            inside = (fu >= 0) & (fu < w) & (fv >= 0) & (fv < h)
+            m = mask & (sid == rid) & front & inside & (jac > 0)
+            index = (mi.UInt32(dr.clip(fv, 0, h - 1)) * w
+                     + mi.UInt32(dr.clip(fu, 0, w - 1))) * 3
+            value = weight / (texel_area * dr.select(jac > 0, jac, 1.0))
+            for ch in range(3):
+                dr.scatter_reduce(dr.ReduceOp.Add, total[r], value[ch], index + ch, m)
+                if caustic is not None:
+                    dr.scatter_reduce(dr.ReduceOp.Add, caustic[r], value[ch], index + ch, m)
+
+
+def trace_receiver_maps(scene: Scene, *, photons: int, seed: int,
+                        resolution: tuple[int, int] | None = None,
+                        extents: list | None = None) -> list[np.ndarray]:
+    """One seed of the photon tracer: irradiance per receiver.
+
+    Returns
+    -------
+    list of ndarray, (H, W, 3), float64
+        E in W/m² over each receiver's (u, v) extent, row 0 at vmin.
+    """
+    tracer = PhotonTracer(scene, resolution=resolution, extents=extents)
+    sums = tracer.trace(photons, seed=seed)
+    return [t / sums.photons for t in sums.total]

@@ -1,0 +1,198 @@
+"""The cached Mitsuba reference of a scene: K seeds, noise target, budget.
+
+Receiver maps: each round traces one batch per seed (K independent PCG32
+streams), then the per-seed estimates give the mean, the variance of the mean and
+the relative noise in the caustic region (:mod:`.noise`); rounds stop when the
+noise is at most ``settings.target_noise`` or every seed has used
+``settings.photons``. Camera image: K seeds of ``settings.spp`` particles per
+pixel (ptracer), mean and variance of the mean.
+"""
+
+from __future__ import annotations
+
+import time
+from contextlib import nullcontext
+from pathlib import Path
+
+import numpy as np
+
+from harness.geometry import build_geometry
+from harness.results import ReceiverMap, RenderResult
+from harness.scene import effects_of
+from harness.scene.model import Scene
+from renderers.mitsuba import _mi
+from renderers.mitsuba.cache import cache_dir, cache_key, entry_lock, load_entry, write_result_dir
+from renderers.mitsuba.camera import CAMERA_LIMITS, camera_max_depth, render_camera
+from renderers.mitsuba.noise import caustic_region, relative_noise, seed_statistics
+from renderers.mitsuba.photons import DEFAULT_BATCH, PhotonTracer, event_chains_counted
+
+__all__ = ["ReceiverEstimate", "estimate_receivers", "render_reference"]
+
+TIMER = "time.perf_counter (wall clock, includes JIT compilation)"
+
+
+class ReceiverEstimate:
+    """Photon-traced receiver maps with their noise (see :func:`estimate_receivers`).
+
+    Attributes
+    ----------
+    maps : list of ReceiverMap
+        Mean irradiance (W/m², (H, W, 3), row 0 at vmin) and variance of the mean.
+    caustic : list of ndarray
+        Mean chain-only irradiance (no direct light), same layout.
+    photons : int
+        Photons per seed (per channel pass) actually traced.
+    relative_noise : float
+        Largest RMS relative standard error over the receivers' caustic regions.
+    stopped_by : str
+        ``"target_noise"`` or ``"budget"``.
+    history : list of (photons per seed, relative noise, seconds)
+    """
+
+    def __init__(self, **fields) -> None:
+        self.__dict__.update(fields)
+
+
+def _progress(total: int, desc: str, enabled: bool):
+    if not enabled:
+        return nullcontext(None)
+    from tqdm import tqdm  # noqa: PLC0415
+
+    return tqdm(total=total, desc=desc, unit="photon", unit_scale=True, leave=False)
+
+
+def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int | None = None,
+                       seed: int | None = None, target_noise: float | None = None,
+                       resolution: tuple[int, int] | None = None, extents: list | None = None,
+                       batch: int = DEFAULT_BATCH, progress: bool = False) -> ReceiverEstimate:
+    """Trace receiver maps with K seeds until the noise target or the budget.
+
+    Parameters default to ``scene.settings`` (photons = budget per seed).
+    """
+    s = scene.settings
+    budget = photons if photons is not None else s.photons
+    k = seeds if seeds is not None else s.seeds
+    first = seed if seed is not None else s.seed
+    target = target_noise if target_noise is not None else s.target_noise
+    start = time.perf_counter()
+    tracer = PhotonTracer(scene, resolution=resolution, extents=extents)
+    per_round = max(1, min(batch, budget))
+    n_rec = len(tracer.extents)
+    sums_total = [[0.0] * n_rec for _ in range(k)]
+    sums_caustic = [[0.0] * n_rec for _ in range(k)]
+    traced, history, noise, stopped = 0, [], float("nan"), "budget"
+    with _progress(budget, f"photons ({k} seeds)", progress) as bar:
+        stream = 0
+        while traced < budget:
+            n = min(per_round, budget - traced)
+            for i in range(k):
+                sums = tracer.trace(n, seed=first + i, stream=stream, batch=per_round)
+                for r in range(n_rec):
+                    sums_total[i][r] = sums_total[i][r] + sums.total[r]
+                    sums_caustic[i][r] = sums_caustic[i][r] + sums.caustic[r]
+            traced += sums.photons
+            stream += 1
+            noises, maps, caustic = [], [], []
+            for r in range(n_rec):
+                mean, var = seed_statistics(np.stack([t[r] for t in sums_total]) / traced)
+                cmean = np.mean([c[r] for c in sums_caustic], axis=0) / traced
+                region = caustic_region(cmean)
+                noises.append(relative_noise(mean, var, region))
+                maps.append(ReceiverMap(mean.astype(np.float32), tracer.extents[r],
+                                        var.astype(np.float32)))
+                caustic.append(cmean.astype(np.float32))
+            finite = [x for x in noises if np.isfinite(x)]
+            noise = max(finite) if finite else float("nan")
+            history.append((traced, noise, time.perf_counter() - start))
+            if bar is not None:
+                bar.update(sums.photons)
+                bar.set_postfix(noise=f"{noise:.4f}")
+            if np.isfinite(noise) and noise <= target:
+                stopped = "target_noise"
+                break
+    return ReceiverEstimate(maps=maps, caustic=caustic, photons=traced, relative_noise=noise,
+                            stopped_by=stopped, history=history, seeds=k, seed=first,
+                            channel_passes=len(tracer.channels))
+
+
+def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> RenderResult:
+    s = scene.settings
+    geometry = build_geometry(scene)
+    timings = {}
+    start = time.perf_counter()
+    est = estimate_receivers(scene, progress=progress)
+    timings["receiver_maps"] = time.perf_counter() - start
+    start = time.perf_counter()
+    frames = []
+    seeds = range(s.seed, s.seed + s.seeds)
+    iterator = seeds
+    if progress:
+        from tqdm import tqdm  # noqa: PLC0415
+
+        iterator = tqdm(seeds, desc=f"camera ({s.spp} spp per seed)", unit="seed", leave=False)
+    for seed in iterator:
+        frames.append(render_camera(scene, spp=s.spp, seed=seed, geometry=geometry))
+    camera, camera_var = seed_statistics(np.stack(frames))
+    timings["camera"] = time.perf_counter() - start
+    metadata = {
+        "hash": key,
+        "variant": versions["variant"],
+        "versions": versions,
+        "photons": est.photons,
+        "photon_budget": s.photons,
+        "channel_passes": est.channel_passes,
+        "spp": s.spp,
+        "seed": s.seed,
+        "seeds": s.seeds,
+        "relative_noise": est.relative_noise,
+        "target_noise": s.target_noise,
+        "stopped_by": est.stopped_by,
+        "noise_history": [list(h) for h in est.history],
+        "event_chains": event_chains_counted(scene),
+        "camera_max_depth": camera_max_depth(scene),
+        "camera_integrator": "ptracer",
+        "camera_limits": list(CAMERA_LIMITS),
+        "scene": scene.name,
+        "camera_variance": camera_var.astype(np.float32),
+    }
+    return RenderResult(
+        renderer="mitsuba", camera=camera.astype(np.float32), receivers=tuple(est.maps),
+        effects=effects_of(scene), timings=timings, timer=TIMER, metadata=metadata,
+    )
+
+
+def render_reference(scene: Scene, *, cache: str | Path | None = None, use_cache: bool = True,
+                     progress: bool = True) -> RenderResult:
+    """The Mitsuba reference of ``scene``, from the cache or rendered and cached.
+
+    Parameters
+    ----------
+    cache
+        Cache root; default ``$CAUSTICS_CACHE_DIR`` or ~/.cache/caustics-harness/reference.
+    use_cache
+        False renders without reading or writing the cache.
+    progress
+        Show progress bars (tqdm, on stderr).
+
+    Returns
+    -------
+    RenderResult
+        ``camera``: mean radiance over K seeds; ``receivers``: mean irradiance maps
+        with ``variance`` (of the mean); ``metadata``: photons, spp, seed(s),
+        relative noise, event chains, versions, hash, ``cache`` ("hit" or why it
+        missed), ``camera_variance`` (ndarray).
+    """
+    versions = _mi.versions()
+    key = cache_key(scene, versions)
+    if not use_cache:
+        return _render(scene, progress=progress, key=key, versions=versions)
+    root = cache_dir(cache)
+    with entry_lock(root, key):
+        result, why = load_entry(root, key)
+        if result is not None:
+            result.metadata["cache"] = "hit"
+            return result
+        result = _render(scene, progress=progress, key=key, versions=versions)
+        write_result_dir(root / key, result)
+        result.metadata["cache"] = f"miss ({why})"
+        return result

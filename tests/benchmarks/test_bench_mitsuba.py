@@ -1,0 +1,47 @@
+"""Mitsuba reference speed on glass_sphere at 256 x 256: photons per second, and the
+wall time for the K-seed photon tracer to reach 1 % relative noise in the caustic
+region (goal: under 10 s on the 2-core CI machine). Numbers are printed and
+stored in pytest-benchmark's extra_info; nothing is asserted about time."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from harness.scene import load_scene
+from renderers.mitsuba.photons import PhotonTracer
+from renderers.mitsuba.reference import estimate_receivers
+
+pytestmark = pytest.mark.bench
+
+
+@pytest.fixture(scope="module")
+def glass_sphere(request):
+    return load_scene(request.config.rootpath / "scenes" / "glass_sphere.toml")
+
+
+def test_photons_per_second(benchmark, glass_sphere):
+    tracer = PhotonTracer(glass_sphere, resolution=(256, 256))
+    tracer.trace(1 << 20, seed=99)  # compile once
+    photons = 1 << 22
+    benchmark.pedantic(tracer.trace, args=(photons,), kwargs={"seed": 0}, rounds=3,
+                       iterations=1)
+    rate = photons / benchmark.stats.stats.mean
+    benchmark.extra_info["photons_per_second"] = rate
+    print(f"\nglass_sphere 256x256: {rate / 1e6:.2f} M photons/s")
+
+
+def test_time_to_one_percent_noise(benchmark, glass_sphere):
+    def run():
+        start = time.perf_counter()
+        est = estimate_receivers(glass_sphere, photons=1 << 27, resolution=(256, 256),
+                                 target_noise=0.01)
+        return est, time.perf_counter() - start
+
+    est, seconds = benchmark.pedantic(run, rounds=1, iterations=1)
+    benchmark.extra_info.update(seconds=seconds, photons_per_seed=est.photons,
+                                relative_noise=est.relative_noise, seeds=est.seeds)
+    print(f"\nglass_sphere 256x256: {est.relative_noise:.4f} relative noise after "
+          f"{seconds:.1f} s ({est.photons} photons x {est.seeds} seeds, {est.stopped_by})")
+    assert est.stopped_by == "target_noise"
