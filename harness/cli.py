@@ -9,8 +9,8 @@ import sys
 from importlib import resources
 from pathlib import Path
 
+from harness.errors import HarnessError
 from harness.scene import SceneError
-from harness.system import SystemSetupError
 
 __all__ = ["COMMAND_MODULES", "default_scene_path", "main"]
 
@@ -48,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
         for problem in error.problems:
             print(f"error: {problem}", file=sys.stderr)
         return 1
-    except SystemSetupError as error:
+    except HarnessError as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

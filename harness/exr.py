@@ -14,10 +14,12 @@ from pathlib import Path
 import numpy as np
 import OpenEXR
 
+from harness.errors import HarnessError
+
 __all__ = ["ExrError", "atomic_write_bytes", "read_exr", "write_exr"]
 
 
-class ExrError(ValueError):
+class ExrError(HarnessError, ValueError):
     """An EXR file is missing, truncated, corrupt, or lacks a channel."""
 
 

@@ -13,6 +13,8 @@ import shutil
 import subprocess
 import sys
 
+from harness.errors import HarnessError
+
 __all__ = ["SystemSetupError", "configure_drjit", "ensure_libllvm", "find_libllvm", "main"]
 
 #: Debian package that provides a libLLVM Dr.Jit 1.5 accepts.
@@ -28,7 +30,7 @@ LLVM_GLOBS = (
 INSTALL_COMMAND = f"apt-get update && apt-get install -y {LLVM_PACKAGE}"
 
 
-class SystemSetupError(RuntimeError):
+class SystemSetupError(HarnessError, RuntimeError):
     """A system package is missing and could not be installed; the message says how."""
 
 

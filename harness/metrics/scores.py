@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.errors import HarnessError
 from harness.metrics.tonemap import luminance, tonemap
 
 __all__ = [
@@ -35,7 +36,7 @@ RELMSE_EPSILON = 0.01
 TRIM_FRACTION = 0.001
 
 
-class MetricInputError(ValueError):
+class MetricInputError(HarnessError, ValueError):
     """Images or options a metric cannot use (shape, NaN, negative HDR, bad range)."""
 
 

@@ -24,6 +24,8 @@ from dataclasses import MISSING, dataclass
 from pathlib import Path
 from typing import Any, Literal, Union
 
+from harness.errors import HarnessError
+
 __all__ = [
     "Problem",
     "SceneError",
@@ -47,7 +49,7 @@ class Problem:
         return f"{self.file}: {where}{self.message}"
 
 
-class SceneError(ValueError):
+class SceneError(HarnessError, ValueError):
     """A scene description could not be read; ``problems`` lists every reason.
 
     ``str(error)`` is one line per problem, each naming the file and field path.

@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 from types import ModuleType
 
+from harness.errors import HarnessError
 from harness.system import configure_drjit
 
 __all__ = ["FALLBACK_VARIANT", "PREFERRED_VARIANT", "MitsubaError", "load", "versions"]
@@ -19,7 +20,7 @@ PREFERRED_VARIANT = "llvm_ad_rgb"
 FALLBACK_VARIANT = "scalar_rgb"
 
 
-class MitsubaError(RuntimeError):
+class MitsubaError(HarnessError, RuntimeError):
     """Mitsuba cannot do what was asked in this environment (message says why)."""
 
 
