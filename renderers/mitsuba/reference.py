@@ -37,9 +37,11 @@ class ReceiverEstimate:
     Attributes
     ----------
     maps : list of ReceiverMap
-        Mean irradiance (W/m², (H, W, 3), row 0 at vmin) and variance of the mean.
-    caustic : list of ndarray
-        Mean chain-only irradiance (no direct light), same layout.
+        Mean total irradiance (direct light and the counted chains; W/m², (H, W, 3),
+        row 0 at vmin) and its variance of the mean.
+    caustic : list of ReceiverMap
+        Mean caustic irradiance (the counted chains only, no direct light: what the
+        radiometric contract calls the receiver map), with its variance of the mean.
     photons : int
         Photons per seed (per channel pass) actually traced.
     relative_noise : float
@@ -95,12 +97,13 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
             noises, maps, caustic = [], [], []
             for r in range(n_rec):
                 mean, var = seed_statistics(np.stack([t[r] for t in sums_total]) / traced)
-                cmean = np.mean([c[r] for c in sums_caustic], axis=0) / traced
-                region = caustic_region(cmean)
-                noises.append(relative_noise(mean, var, region))
+                cmean, cvar = seed_statistics(np.stack([c[r] for c in sums_caustic]) / traced)
+                # Noise of what is compared: the caustic map, over its caustic region.
+                noises.append(relative_noise(cmean, cvar, caustic_region(cmean)))
                 maps.append(ReceiverMap(mean.astype(np.float32), tracer.extents[r],
                                         var.astype(np.float32)))
-                caustic.append(cmean.astype(np.float32))
+                caustic.append(ReceiverMap(cmean.astype(np.float32), tracer.extents[r],
+                                           cvar.astype(np.float32)))
             finite = [x for x in noises if np.isfinite(x)]
             noise = max(finite) if finite else float("nan")
             history.append((traced, noise, time.perf_counter() - start))
@@ -156,7 +159,7 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> Render
         "camera_variance": camera_var.astype(np.float32),
     }
     return RenderResult(
-        renderer="mitsuba", camera=camera.astype(np.float32), receivers=tuple(est.maps),
+        renderer="mitsuba", camera=camera.astype(np.float32), receivers=tuple(est.caustic),
         effects=effects_of(scene), timings=timings, timer=TIMER, metadata=metadata,
     )
 
