@@ -69,7 +69,7 @@ def scene_folder(name: str, *, taken: Sequence[str] = ()) -> str:
     ``-3``, ... appended while the name is in ``taken``.
     """
     text = unicodedata.normalize("NFKD", str(name)).encode("ascii", "ignore").decode()
-    folder = re.sub(r"[^A-Za-z0-9._-]+", "_", text).lstrip("._")[:64] or "scene"
+    folder = re.sub(r"[^A-Za-z0-9._-]+", "_", text).strip("._")[:64].rstrip("._") or "scene"
     taken_set = set(taken) | _RESERVED
     candidate, n = folder, 1
     while candidate in taken_set:
@@ -178,7 +178,8 @@ def _view_panels(comparison: SceneComparison, view: str, assets: _Assets,
         "title": "Camera image" if view == "camera"
         else f"Receiver {view.removeprefix('receiver')} irradiance map",
         "units": "W m⁻² sr⁻¹" if view == "camera" else "W/m²",
-        "white": white, "factor": factor, "hdr": None, "maps": [],
+        "white": white, "factor": factor, "hdr": None, "maps": [], "regions": None,
+        "size": None,
         "shape": raw["test"].shape[:2] if "test" in raw else None,
     }
     if test is not None and reference is not None:
@@ -243,8 +244,8 @@ def _table(table: Table | None) -> dict[str, Any] | None:
     return {"columns": list(table.columns), "rows": [list(r) for r in table.rows]}
 
 
-def _plot_panels(comparison: SceneComparison, assets: _Assets) -> dict[str, str]:
-    out = {}
+def _plot_panels(comparison: SceneComparison, assets: _Assets) -> dict[str, str | None]:
+    out: dict[str, str | None] = {"convergence": None, "cost": None}
     if comparison.convergence is not None and comparison.convergence.rows:
         svg = plots.figure_bytes(plots.convergence_figure(comparison.convergence))
         out["convergence"] = assets.add("convergence.svg", svg, mime="image/svg+xml")
