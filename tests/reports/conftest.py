@@ -5,10 +5,15 @@ the real metric functions of ``harness.metrics`` and ``harness.studies.pareto``.
 
 from __future__ import annotations
 
+import base64
+import io
+import re
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from harness.compare.records import MetricValue, SceneComparison, Table, ThresholdCheck
 from harness.metrics import (
@@ -20,6 +25,7 @@ from harness.metrics import (
     white_point,
 )
 from harness.studies.pareto import equal_error_speedup, pareto_front
+from reports import images
 
 #: Markup that must render as text: a script, an event handler, a closing tag.
 HOSTILE_NAME = '<script>window.__pwned = 1</script><b>bold</b>/../x'
@@ -173,6 +179,20 @@ def make_comparison(*, name: str = "glass_sphere",
         thresholds=checks,
         stability={"hard_cases": 3, "nan_or_inf": 0, "lost_splats": 12, "outcome": "pass"},
     )
+
+
+def hdr_uris(scene_dir: Path) -> dict[str, dict[str, str]]:
+    """The HDR preview data: URIs a linked scene folder ships in ``hdr.js``."""
+    text = (scene_dir / "hdr.js").read_text("utf-8")
+    found = re.findall(r'window\.causticsHdr\["(\w+)"\] = \{"test": "([^"]+)", '
+                       r'"reference": "([^"]+)"\};', text)
+    return {view: {"test": t, "reference": r} for view, t, r in found}
+
+
+def decode_uri(uri: str) -> np.ndarray:
+    """Linear HDR values of an RGBE-stack PNG data: URI (as the page's JS decodes them)."""
+    data = base64.b64decode(uri.split(",", 1)[1])
+    return images.decode_rgbe_stack(np.asarray(Image.open(io.BytesIO(data))))
 
 
 @pytest.fixture(scope="session")

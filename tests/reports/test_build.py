@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import base64
-import io
 import re
 import xml.etree.ElementTree as ET
 from dataclasses import replace
@@ -12,11 +10,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from PIL import Image
 
 from harness.compare.records import METRIC_FORMULAS
-from reports import build_report, images, scene_folder
-from tests.reports.conftest import HOSTILE_NAME
+from reports import build_report, scene_folder
+from tests.reports.conftest import HOSTILE_NAME, decode_uri, hdr_uris
 
 
 @pytest.fixture(scope="module")
@@ -152,28 +149,16 @@ def test_exr_links_are_relative_and_flag_missing_files(tmp_path, comparison):
     assert "not found beside this page" in (tmp_path / "glass_sphere" / "index.html").read_text()
 
 
-def _hdr_uris(scene_dir: Path) -> dict[str, dict[str, str]]:
-    text = (scene_dir / "hdr.js").read_text("utf-8")
-    found = re.findall(r'window\.causticsHdr\["(\w+)"\] = \{"test": "([^"]+)", '
-                       r'"reference": "([^"]+)"\};', text)
-    return {view: {"test": t, "reference": r} for view, t, r in found}
-
-
-def _decode_uri(uri: str) -> np.ndarray:
-    data = base64.b64decode(uri.split(",", 1)[1])
-    return images.decode_rgbe_stack(np.asarray(Image.open(io.BytesIO(data))))
-
-
 def test_hdr_previews_decode_to_the_images_receivers_flipped(linked, comparison):
     """The shipped HDR data is the comparison's image (receiver maps upside down so
     +v points up), within RGBE precision."""
-    uris = _hdr_uris(linked / "glass_sphere")
+    uris = hdr_uris(linked / "glass_sphere")
     assert set(uris) == {"camera", "receiver0"}
     for view, flip in (("camera", False), ("receiver0", True)):
         for layer in ("test", "reference"):
             expected = np.asarray(comparison.images[f"{view}/{layer}"], np.float64)
             expected = expected[::-1] if flip else expected
-            decoded = _decode_uri(uris[view][layer])
+            decoded = decode_uri(uris[view][layer])
             peak = expected.max(axis=-1, keepdims=True)
             assert np.all(np.abs(decoded - expected) <= peak * 2.0**-7 + 1e-30), (view, layer)
 
@@ -183,7 +168,7 @@ def test_large_images_are_downsampled_and_the_page_says_so(tmp_path, comparison_
     build_report(tmp_path, [c], preview_size=128)
     html = (tmp_path / "glass_sphere" / "index.html").read_text("utf-8")
     assert "box-filtered down 4×" in html
-    camera = _decode_uri(_hdr_uris(tmp_path / "glass_sphere")["camera"]["test"])
+    camera = decode_uri(hdr_uris(tmp_path / "glass_sphere")["camera"]["test"])
     assert camera.shape == (75, 100, 3)
 
 
