@@ -1,5 +1,9 @@
 """System packages the harness needs, found or installed, and Dr.Jit's LLVM path.
 
+Also Debian's ``chromium``, the browser the report's browser test drives through
+Playwright (``executable_path="/usr/bin/chromium"``; Playwright's own browser
+downloads are never used).
+
 Dr.Jit 1.5's LLVM backend aborts on Debian 12's default LLVM 15 ("Cannot select:
 fminimum"); Debian's ``libllvm19`` works. We never leave Dr.Jit to guess: the path is
 set explicitly in ``DRJIT_LIBLLVM_PATH`` before Dr.Jit is imported.
@@ -15,7 +19,14 @@ import sys
 
 from harness.errors import HarnessError
 
-__all__ = ["SystemSetupError", "configure_drjit", "ensure_libllvm", "find_libllvm", "main"]
+__all__ = [
+    "SystemSetupError",
+    "configure_drjit",
+    "ensure_chromium",
+    "ensure_libllvm",
+    "find_libllvm",
+    "main",
+]
 
 #: Debian package that provides a libLLVM Dr.Jit 1.5 accepts.
 LLVM_PACKAGE = "libllvm19"
@@ -28,6 +39,10 @@ LLVM_GLOBS = (
     "/usr/lib/llvm-19/lib/libLLVM*.so*",
 )
 INSTALL_COMMAND = f"apt-get update && apt-get install -y {LLVM_PACKAGE}"
+#: Debian package and binary of the browser the report's browser test uses.
+CHROMIUM_PACKAGE = "chromium"
+CHROMIUM_PATH = "/usr/bin/chromium"
+CHROMIUM_INSTALL_COMMAND = f"apt-get update && apt-get install -y {CHROMIUM_PACKAGE}"
 
 
 class SystemSetupError(HarnessError, RuntimeError):
@@ -89,6 +104,38 @@ def ensure_libllvm(*, install: bool = True) -> str:
     )
 
 
+def ensure_chromium(*, install: bool = True) -> str:
+    """Find Debian's chromium for the browser test, apt-installing it when root and allowed.
+
+    Returns
+    -------
+    str
+        Path of the browser binary (``/usr/bin/chromium``).
+
+    Raises
+    ------
+    SystemSetupError
+        Not found, and not installable here; the message gives the exact command.
+    """
+    if os.path.isfile(CHROMIUM_PATH):
+        return CHROMIUM_PATH
+    can_install = install and hasattr(os, "geteuid") and os.geteuid() == 0
+    if can_install and shutil.which("apt-get"):
+        try:
+            _apt_install(CHROMIUM_PACKAGE)
+        except subprocess.CalledProcessError as error:
+            raise SystemSetupError(
+                f"installing {CHROMIUM_PACKAGE} failed ({error}); run: "
+                f"{CHROMIUM_INSTALL_COMMAND}"
+            ) from None
+        if os.path.isfile(CHROMIUM_PATH):
+            return CHROMIUM_PATH
+    raise SystemSetupError(
+        f"the report's browser test needs {CHROMIUM_PATH} and it was not found; as root "
+        f"run: {CHROMIUM_INSTALL_COMMAND}"
+    )
+
+
 def configure_drjit(*, install: bool = True) -> str:
     """Set ``DRJIT_LIBLLVM_PATH`` explicitly (before Dr.Jit is imported); return it."""
     path = ensure_libllvm(install=install)
@@ -97,13 +144,25 @@ def configure_drjit(*, install: bool = True) -> str:
 
 
 def main() -> int:
-    """``python -m harness.system``: install/check system packages; print what was found."""
+    """``python -m harness.system``: install/check system packages; print what was found.
+
+    A missing libLLVM is an error. A missing chromium is an error on CI (``CI``
+    set, where the browser test must run) and a warning elsewhere (the browser
+    test then skips and says why).
+    """
     try:
         path = configure_drjit(install=True)
     except SystemSetupError as error:
         print(f"caustics: {error}", file=sys.stderr)
         return 1
     print(f"libLLVM for Dr.Jit: {path}")
+    try:
+        print(f"chromium for the report's browser test: {ensure_chromium(install=True)}")
+    except SystemSetupError as error:
+        if os.environ.get("CI"):
+            print(f"caustics: {error}", file=sys.stderr)
+            return 1
+        print(f"caustics: warning: {error}", file=sys.stderr)
     return 0
 
 

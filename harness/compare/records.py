@@ -140,6 +140,10 @@ class SceneComparison:
     thresholds : tuple of ThresholdCheck
     stability : dict or None
         Outcome of the numerical-stability checks for this scene, if run.
+    speedup_point : (float, float) or None
+        The caustics-mapping (time s, relMSE) that ``speedup`` was computed for;
+        the report marks it on the cost plot (when None it takes the Pareto point
+        nearest to ``speedup.reference_time / speedup.speedup``).
     """
 
     name: str
@@ -158,6 +162,7 @@ class SceneComparison:
     files: dict[str, str] = field(default_factory=dict)
     thresholds: tuple[ThresholdCheck, ...] = ()
     stability: dict[str, Any] | None = None
+    speedup_point: tuple[float, float] | None = None
 
     def metric(self, view: str, region: str, metric: str) -> MetricValue:
         """Look one metric up; KeyError if it was not computed."""

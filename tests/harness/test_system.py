@@ -49,3 +49,48 @@ def test_install_is_attempted_as_root(monkeypatch):
     monkeypatch.setattr(system, "_apt_install", fake_install)
     assert "19" in system.ensure_libllvm(install=True)
     assert calls == ["libllvm19"]
+
+
+def test_chromium_is_found_where_debian_puts_it(monkeypatch, tmp_path):
+    browser = tmp_path / "chromium"
+    browser.write_bytes(b"")
+    monkeypatch.setattr(system, "CHROMIUM_PATH", str(browser))
+    monkeypatch.setattr(system, "_apt_install", lambda package: pytest.fail("no install"))
+    assert system.ensure_chromium(install=True) == str(browser)
+
+
+def test_chromium_is_installed_as_root(monkeypatch, tmp_path):
+    """As root, a missing chromium triggers the apt install of Debian's package."""
+    browser = tmp_path / "chromium"
+    calls = []
+    monkeypatch.setattr(system, "CHROMIUM_PATH", str(browser))
+    monkeypatch.setattr(system.os, "geteuid", lambda: 0)
+    monkeypatch.setattr(system.shutil, "which", lambda name: "/usr/bin/apt-get")
+
+    def fake_install(package):
+        calls.append(package)
+        browser.write_bytes(b"")
+
+    monkeypatch.setattr(system, "_apt_install", fake_install)
+    assert system.ensure_chromium(install=True) == str(browser)
+    assert calls == ["chromium"]
+
+
+def test_missing_chromium_not_root_names_the_command(monkeypatch, tmp_path):
+    monkeypatch.setattr(system, "CHROMIUM_PATH", str(tmp_path / "absent"))
+    monkeypatch.setattr(system.os, "geteuid", lambda: 1000)
+    with pytest.raises(system.SystemSetupError) as info:
+        system.ensure_chromium(install=True)
+    assert "apt-get update && apt-get install -y chromium" in str(info.value)
+
+
+@pytest.mark.parametrize(("ci", "code"), [("", 0), ("true", 1)])
+def test_main_fails_on_missing_chromium_only_on_ci(monkeypatch, tmp_path, capsys, ci, code):
+    """Without chromium, setup warns locally (the browser test skips) but fails on CI,
+    where the browser test must run."""
+    monkeypatch.setattr(system, "configure_drjit", lambda install: "/lib/libLLVM.so.19")
+    monkeypatch.setattr(system, "CHROMIUM_PATH", str(tmp_path / "absent"))
+    monkeypatch.setattr(system.os, "geteuid", lambda: 1000)
+    monkeypatch.setenv("CI", ci)
+    assert system.main() == code
+    assert "apt-get install -y chromium" in capsys.readouterr().err

@@ -1,0 +1,169 @@
+"""Matplotlib plots of the report: convergence per estimator, cost versus accuracy.
+
+Each plot is returned as SVG bytes (for HTML) and can also be written as PDF (for
+papers) with :func:`figure_bytes`. Text stays text in the SVG (``svg.fonttype =
+none``) and ids are salted deterministically, so the files are small and a rebuild
+gives the same bytes.
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Sequence
+
+import numpy as np
+
+from harness.compare.records import Table
+from harness.studies.pareto import EqualErrorSpeedup, pareto_front
+
+__all__ = ["convergence_figure", "cost_figure", "figure_bytes"]
+
+_RC = {"svg.fonttype": "none", "svg.hashsalt": "caustics-report", "font.size": 8}
+
+
+def _pyplot():
+    import matplotlib  # noqa: PLC0415 - slow import, only when a plot is drawn
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    return plt
+
+
+def figure_bytes(figure, *, fmt: str = "svg") -> bytes:
+    """Serialise ``figure`` as ``svg`` or ``pdf`` (without a creation date) and close it."""
+    plt = _pyplot()
+    buffer = io.BytesIO()
+    metadata = {"Date": None} if fmt == "svg" else {"CreationDate": None}
+    with plt.rc_context(_RC):
+        figure.savefig(buffer, format=fmt, bbox_inches="tight", metadata=metadata)
+    plt.close(figure)
+    return buffer.getvalue()
+
+
+def _float(values: Sequence) -> np.ndarray:
+    return np.array([np.nan if v is None else float(v) for v in values], float)
+
+
+def estimator_label(estimator: str, safeguarded) -> str:
+    """``newton`` or ``newton (safeguarded)``."""
+    return f"{estimator} (safeguarded)" if safeguarded in (True, 1, "true", "True") else estimator
+
+
+def convergence_figure(table: Table):
+    """Small multiples, one panel per estimator: hit-distance error (caustic-map
+    texels, log scale: mean, p95, max) against the iteration, and the fraction of
+    vertices converged on a second axis.
+
+    Parameters
+    ----------
+    table : Table
+        The convergence table (columns in ``SceneComparison.convergence``).
+    """
+    plt = _pyplot()
+    estimators = table.column("estimator")
+    guarded = (table.column("safeguarded") if "safeguarded" in table.columns
+               else [False] * len(estimators))
+    labels = [estimator_label(e, s) for e, s in zip(estimators, guarded, strict=True)]
+    names = list(dict.fromkeys(labels))
+    columns = 3 if len(names) > 4 else max(1, len(names))
+    rows = -(-len(names) // columns)
+    with plt.rc_context(_RC):
+        figure, axes = plt.subplots(rows, columns, figsize=(3.0 * columns, 2.3 * rows),
+                                    sharex=True, sharey=True, squeeze=False)
+        iterations = _float(table.column("iteration"))
+        for ax, name in zip(axes.flat, names, strict=False):
+            pick = np.array([label == name for label in labels])
+            order = np.argsort(iterations[pick])
+            x = iterations[pick][order]
+            for column, style in (("mean_error_texels", "-o"), ("p95_error_texels", "--s"),
+                                  ("max_error_texels", ":^")):
+                if column in table.columns:
+                    y = _float(table.column(column))[pick][order]
+                    y = np.where(y > 0, y, np.nan)  # log axis: zero error is off the plot
+                    ax.plot(x, y, style, markersize=3, label=column.split("_")[0])
+            ax.set_yscale("log")
+            ax.set_title(name)
+            ax.grid(True, which="both", alpha=0.3)
+            if "converged" in table.columns:
+                twin = ax.twinx()
+                twin.plot(x, _float(table.column("converged"))[pick][order], color="0.5",
+                          linewidth=1, label="converged")
+                twin.set_ylim(-0.05, 1.05)
+                twin.tick_params(labelsize=6, colors="0.4")
+        for ax in axes.flat[len(names):]:
+            ax.set_visible(False)
+        for ax in axes[-1]:
+            ax.set_xlabel("iteration")
+        for ax in axes[:, 0]:
+            ax.set_ylabel("hit-distance error (texels)")
+        axes.flat[0].legend(fontsize=6, loc="upper right")
+        figure.suptitle("Estimator convergence (grey: fraction converged, right axis)")
+    return figure
+
+
+def _speedup_point(speedup: EqualErrorSpeedup, point, front_times, front_errors):
+    """The real-time (time, error) the speedup was computed for: ``point`` when
+    known, else the front point nearest (in log time) to reference_time / speedup."""
+    if point is not None:
+        return float(point[0]), float(point[1])
+    rt_time = speedup.reference_time / speedup.speedup
+    if not len(front_times):
+        return rt_time, float("nan")
+    nearest = int(np.argmin(np.abs(np.log(front_times) - np.log(rt_time))))
+    return rt_time, float(front_errors[nearest])
+
+
+def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
+                point: tuple[float, float] | None = None):
+    """Time against relMSE (log-log): every caustics-mapping configuration, their
+    Pareto front (:func:`harness.studies.pareto.pareto_front`), the reference's own
+    error-versus-time curve, and the equal-error speedup in the title.
+
+    Parameters
+    ----------
+    table : Table
+        The cost table (columns in ``SceneComparison.cost``).
+    speedup : EqualErrorSpeedup, optional
+        Shown in the title and as an arrow from the real-time point to the
+        reference time that reaches the same error.
+    point : (float, float), optional
+        The real-time (time s, relMSE) the speedup was computed for; when not
+        given, the Pareto point nearest to ``reference_time / speedup`` in time.
+    """
+    plt = _pyplot()
+    series = np.array(table.column("series"))
+    times = _float(table.column("time_s"))
+    errors = _float(table.column("relmse"))
+    with plt.rc_context(_RC):
+        figure, ax = plt.subplots(figsize=(5.5, 3.8))
+        cm = series == "caustics_mapping"
+        ax.scatter(times[cm], errors[cm], s=10, color="tab:blue", alpha=0.6,
+                   label="caustics mapping configurations")
+        idx = np.flatnonzero(cm)
+        front = idx[pareto_front(times[cm], errors[cm])]
+        ax.plot(times[front], errors[front], "-o", color="tab:blue", markersize=4,
+                label="Pareto front")
+        ref = np.flatnonzero(series == "reference")
+        if ref.size:
+            ref = ref[np.argsort(times[ref])]
+            ax.plot(times[ref], errors[ref], "-s", color="tab:red", markersize=4,
+                    label="reference (Mitsuba) error vs time")
+        title = "Cost versus accuracy"
+        if speedup is not None:
+            rt_time, rt_error = _speedup_point(speedup, point, times[front], errors[front])
+            title += f" — equal-error speedup {speedup.speedup:.4g}× ({speedup.kind})"
+            if np.isfinite(rt_error):
+                ax.annotate("", xy=(speedup.reference_time, rt_error),
+                            xytext=(rt_time, rt_error),
+                            arrowprops={"arrowstyle": "->", "color": "0.3"})
+                ax.plot([speedup.reference_time], [rt_error], "x", color="tab:red",
+                        label=f"reference at equal error ({speedup.reference_time:.3g} s)")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("relMSE")
+        ax.set_title(title)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=6)
+    return figure

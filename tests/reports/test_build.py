@@ -1,0 +1,211 @@
+"""The report's files without a browser: layout, escaping, tables, links, embedding."""
+
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import replace
+from html import unescape
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from harness.compare.records import METRIC_FORMULAS
+from reports import build_report, scene_folder
+from tests.reports.conftest import HOSTILE_NAME, decode_uri, hdr_uris
+
+
+@pytest.fixture(scope="module")
+def linked(tmp_path_factory, comparison, hostile_comparison) -> Path:
+    """A linked (multi-file) report of two scenes."""
+    out = tmp_path_factory.mktemp("linked")
+    build_report(out, [comparison, hostile_comparison])
+    return out
+
+
+@pytest.fixture(scope="module")
+def embedded(tmp_path_factory, comparison, hostile_comparison) -> Path:
+    """A self-contained report of the same two scenes."""
+    out = tmp_path_factory.mktemp("embedded")
+    build_report(out, [comparison, hostile_comparison], self_contained=True)
+    return out
+
+
+@pytest.mark.parametrize(("name", "expected"), [
+    ("glass_sphere", "glass_sphere"),
+    ("a/b", "a_b"),
+    ("../../etc/passwd", "etc_passwd"),
+    ("<script>alert(1)</script>", "script_alert_1_script"),
+    ("", "scene"),
+    ("...", "scene"),
+    ("_static", "static"),
+    ("Wasser über Glas", "Wasser_uber_Glas"),
+])
+def test_scene_folder_is_a_safe_single_path_component(name, expected):
+    assert scene_folder(name) == expected
+
+
+def test_scene_folder_never_repeats_and_stays_short():
+    taken = []
+    for _ in range(3):
+        taken.append(scene_folder("a/b", taken=taken))
+    assert taken == ["a_b", "a_b-2", "a_b-3"]
+    assert len(scene_folder("x" * 500)) == 64
+
+
+def test_layout_of_a_linked_report(linked, comparison):
+    """index.html, the vendored static files, and one folder per scene with its
+    previews, plots and HDR data; nothing written outside ``out_dir``."""
+    assert (linked / "index.html").is_file()
+    assert {p.name for p in (linked / "_static").iterdir()} == {"report.css", "report.js"}
+    scene = linked / "glass_sphere"
+    for name in ("index.html", "hdr.js", "convergence.svg", "cost_accuracy.svg",
+                 "camera_signed.png", "receiver0_flip.png", "thumbnail_test.png"):
+        assert (scene / name).is_file(), name
+    folders = sorted(p.name for p in linked.iterdir() if p.is_dir())
+    assert folders == sorted(["_static", "glass_sphere", scene_folder(HOSTILE_NAME)])
+
+
+def test_self_contained_report_is_one_file_per_page(embedded):
+    """Only HTML files are written, and they reference no other local file except
+    the scene pages, the index and the EXR originals."""
+    files = sorted(p.relative_to(embedded).as_posix() for p in embedded.rglob("*")
+                   if p.is_file())
+    assert files == sorted(["index.html", "glass_sphere/index.html",
+                            f"{scene_folder(HOSTILE_NAME)}/index.html"])
+    for page in files:
+        html = (embedded / page).read_text("utf-8")
+        refs = re.findall(r'(?:src|href)="([^"]*)"', html)
+        assert refs, page
+        for ref in refs:
+            assert (ref.startswith("data:") or ref.endswith((".exr", "index.html"))
+                    or ref.startswith("#")), (page, ref[:60])
+        assert "<script src" not in html and "<link" not in html
+
+
+def test_no_page_points_at_the_network(linked, embedded):
+    """No src or href to http(s) or protocol-relative URLs, in either mode."""
+    for root in (linked, embedded):
+        for page in root.rglob("*.html"):
+            refs = re.findall(r'(?:src|href)="([^"]*)"', page.read_text("utf-8"))
+            assert not [r for r in refs if re.match(r"^(https?:)?//", r)], page
+
+
+def test_hostile_text_is_escaped_and_folder_is_sanitised(linked, embedded):
+    """Name and description appear only HTML-escaped; no raw tag survives."""
+    folder = scene_folder(HOSTILE_NAME)
+    assert "/" not in folder and "<" not in folder
+    for root in (linked, embedded):
+        for page in (root / "index.html", root / folder / "index.html"):
+            html = page.read_text("utf-8")
+            assert "<script>window.__pwned" not in html
+            assert '<img src=x' not in html
+            assert "&lt;script&gt;window.__pwned = 1&lt;/script&gt;" in html
+
+
+def test_metric_table_shows_value_noise_floor_and_formula(linked, comparison):
+    html = (linked / "glass_sphere" / "index.html").read_text("utf-8")
+    m = comparison.metric("receiver0", "caustic", "ssim")
+    row = re.search(r"<tr><td>caustic</td><td>ssim</td>(.*?)</tr>",
+                    html[html.index("<caption>receiver0</caption>"):], re.S).group(1)
+    assert f"{m.value:.4g}" in row and f"{m.noise_floor:.4g}" in row
+    assert "Wang et al. 2004" in row
+    shown = {m.metric for m in comparison.metrics}
+    for metric in shown:
+        assert METRIC_FORMULAS[metric] in unescape(html), metric
+
+
+def test_thresholds_pass_fail_and_none(linked, embedded):
+    """The summary counts passes and failures; a scene without checks says so."""
+    index = (linked / "index.html").read_text("utf-8")
+    assert "1/2 passed" in index and "(1 failed)" in index
+    assert "no thresholds checked" in index
+    scene = (linked / "glass_sphere" / "index.html").read_text("utf-8")
+    assert scene.count('<tr class="fail">') == 1 and "FAIL" in scene
+
+
+def test_provenance_settings_and_claims_are_shown(linked, comparison):
+    html = (linked / "glass_sphere" / "index.html").read_text("utf-8")
+    for text in ("caustic_map", "L T T D", "3.9.0", "reference_cache_hit",
+                 "scenes/glass_sphere.toml", "refraction.double",
+                 "one iteration is enough for rendering", "lost_splats"):
+        assert text in html, text
+    assert f"{comparison.speedup.speedup:.4g}×" in html
+
+
+def test_exr_links_are_relative_and_flag_missing_files(tmp_path, comparison):
+    """Links resolve from the scene page; a missing original is marked; a path that
+    leaves the scene folder is not linked."""
+    c = replace(comparison, files={"camera/test": "camera_cm.exr",
+                                   "camera/reference": "../../escape.exr"})
+    (tmp_path / "glass_sphere").mkdir()
+    (tmp_path / "glass_sphere" / "camera_cm.exr").write_bytes(b"x")
+    build_report(tmp_path, [c])
+    html = (tmp_path / "glass_sphere" / "index.html").read_text("utf-8")
+    assert '<a href="camera_cm.exr">camera_cm.exr</a></li>' in html
+    assert 'href="../../escape.exr"' not in html and "not linked" in html
+    build_report(tmp_path, [replace(c, files={"camera/test": "gone.exr"})])
+    assert "not found beside this page" in (tmp_path / "glass_sphere" / "index.html").read_text()
+
+
+def test_hdr_previews_decode_to_the_images_receivers_flipped(linked, comparison):
+    """The shipped HDR data is the comparison's image (receiver maps upside down so
+    +v points up), within RGBE precision."""
+    uris = hdr_uris(linked / "glass_sphere")
+    assert set(uris) == {"camera", "receiver0"}
+    for view, flip in (("camera", False), ("receiver0", True)):
+        for layer in ("test", "reference"):
+            expected = np.asarray(comparison.images[f"{view}/{layer}"], np.float64)
+            expected = expected[::-1] if flip else expected
+            decoded = decode_uri(uris[view][layer])
+            peak = expected.max(axis=-1, keepdims=True)
+            assert np.all(np.abs(decoded - expected) <= peak * 2.0**-7 + 1e-30), (view, layer)
+
+
+def test_large_images_are_downsampled_and_the_page_says_so(tmp_path, comparison_factory):
+    c = comparison_factory(camera=(300, 400), receiver=(32, 32))
+    build_report(tmp_path, [c], preview_size=128)
+    html = (tmp_path / "glass_sphere" / "index.html").read_text("utf-8")
+    assert "box-filtered down 4×" in html
+    camera = decode_uri(hdr_uris(tmp_path / "glass_sphere")["camera"]["test"])
+    assert camera.shape == (75, 100, 3)
+
+
+def test_plots_are_valid_svg_with_the_pareto_front(linked):
+    cost = ET.parse(linked / "glass_sphere" / "cost_accuracy.svg").getroot()
+    assert cost.tag.endswith("svg")
+    text = (linked / "glass_sphere" / "cost_accuracy.svg").read_text("utf-8")
+    assert "Pareto front" in text and "equal-error speedup" in text
+    conv = (linked / "glass_sphere" / "convergence.svg").read_text("utf-8")
+    for label in ("modified", "newton (safeguarded)", "secant"):
+        assert label in conv
+
+
+def test_optional_parts_may_be_missing(tmp_path, comparison):
+    """No studies, no thresholds, no receiver, no provenance: the page still builds
+    and says what was not run."""
+    c = replace(comparison, convergence=None, cost=None, speedup=None, speedup_point=None,
+                claims={}, provenance={}, files={}, thresholds=(), stability=None,
+                images={k: v for k, v in comparison.images.items() if k.startswith("camera/")})
+    build_report(tmp_path, [c])
+    html = (tmp_path / "glass_sphere" / "index.html").read_text("utf-8")
+    assert html.count("<p>Not run.</p>") == 3 and "No thresholds checked." in html
+    assert "No originals written." in html and "receiver0_signed" not in html
+
+
+def test_bad_image_key_is_refused(tmp_path, comparison):
+    c = replace(comparison, images={"../evil/test": np.zeros((2, 2, 3))})
+    with pytest.raises(ValueError, match="image keys"):
+        build_report(tmp_path, [c])
+
+
+def test_rebuild_overwrites_in_place(tmp_path, comparison):
+    """Building twice gives the same page (deterministic output, atomic rewrites)."""
+    build_report(tmp_path, [comparison])
+    first = (tmp_path / "glass_sphere" / "index.html").read_bytes()
+    svg = (tmp_path / "glass_sphere" / "cost_accuracy.svg").read_bytes()
+    build_report(tmp_path, [comparison])
+    assert (tmp_path / "glass_sphere" / "index.html").read_bytes() == first
+    assert (tmp_path / "glass_sphere" / "cost_accuracy.svg").read_bytes() == svg
+    assert not list(tmp_path.rglob("*.tmp"))
