@@ -17,6 +17,7 @@ __all__ = ["main", "default_scene_path", "COMMAND_MODULES"]
 #: Modules that each provide ``register(subparsers)``; one line per command group.
 COMMAND_MODULES = (
     "harness.scene_commands",
+    "renderers.caustics_mapping.cli",
 )
 
 

@@ -111,6 +111,13 @@ def _normalize(v) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
+def _up_for(forward) -> tuple[float, float, float]:
+    """An up vector that keeps world x along the view's x for steep views, so the
+    square frustum's edges line up with axis-aligned scenes (no 45-degree waste)."""
+    f = _normalize(forward)
+    return (0.0, 1.0, 0.0) if abs(f[2]) > 0.7 else (0.0, 0.0, 1.0)
+
+
 def look_at(eye, forward, up) -> np.ndarray:
     """World -> view matrix looking along ``forward`` (the view's -z)."""
     f = _normalize(forward)
@@ -175,13 +182,13 @@ def _fitted_perspective(eye: np.ndarray, points: np.ndarray, name: str):
     t = math.tan(half) * 1.02
     near = max((dist - radius) * 0.9, dist * 1e-4)
     far = dist + radius * 1.1
-    return LightView(name, perspective(t, near, far) @ look_at(eye, center - eye, (0, 0, 1)),
+    return LightView(name, perspective(t, near, far) @ look_at(eye, center - eye, _up_for(center - eye)),
                      True, t)
 
 
 def _orthographic_fit(direction: np.ndarray, points: np.ndarray, name: str) -> LightView:
     """An orthographic view along ``direction`` enclosing ``points``."""
-    view = look_at(np.zeros(3), direction, (0, 0, 1))
+    view = look_at(np.zeros(3), direction, _up_for(direction))
     local = points @ view[:3, :3].T
     lo, hi = local.min(axis=0), local.max(axis=0)
     center_xy = (lo[:2] + hi[:2]) / 2
@@ -191,7 +198,7 @@ def _orthographic_fit(direction: np.ndarray, points: np.ndarray, name: str) -> L
     eye_local = np.array([center_xy[0], center_xy[1], hi[2] + 0.05 * depth + 1e-6])
     eye = view[:3, :3].T @ eye_local
     near, far = 0.025 * depth + 1e-7, 1.1 * depth + 0.05 * depth + 2e-6
-    return LightView(name, orthographic(h, near, far) @ look_at(eye, direction, (0, 0, 1)),
+    return LightView(name, orthographic(h, near, far) @ look_at(eye, direction, _up_for(direction)),
                      False, h)
 
 
@@ -241,7 +248,7 @@ def light_setups(scene: Scene, geometry: SceneGeometry) -> tuple[LightSetup, ...
         beam = math.radians(light.beam_width or light.cutoff_angle)
         near, far = _depth_range(everything, eye)
         view = LightView("spot", perspective(math.tan(cutoff), near, far)
-                         @ look_at(eye, axis, (0, 0, 1)), True, math.tan(cutoff))
+                         @ look_at(eye, axis, _up_for(axis)), True, math.tan(cutoff))
         fitted = _fitted_perspective(eye, objects, "fitted")
         return (LightSetup(
             kind="spot", position=eye, direction=axis, power=np.asarray(light.intensity, float),

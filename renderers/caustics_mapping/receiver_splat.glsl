@@ -54,7 +54,10 @@ void main() {
     }
     vec2 size = vec2(u_map_size);
     vec2 span = vec2(u_extent.y - u_extent.x, u_extent.w - u_extent.z);
-    vec2 c = (uv - u_extent.xz) / span * size;                     // map pixels
+    // Map pixels. A hit whose estimate P lies just off the (u, v) domain (its lookup
+    // found this receiver, so it is at the edge) is clamped onto the border texels,
+    // so no flux is lost between the caustic map and this map.
+    vec2 c = clamp((uv - u_extent.xz) / span * size, vec2(0.5), size - 0.5);
     vec2 sigma = max(metres * u_uv_per_metre / span * size, vec2(0.5));
     sigma = min(sigma, vec2(u_max_radius / u_cut));
     float norm = splat_norm(c, sigma, u_cut, vec2(0.0), size);

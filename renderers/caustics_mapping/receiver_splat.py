@@ -57,7 +57,8 @@ def uv_mapping(receiver: ReceiverGeometry) -> UvMapping:
     scale = max(umax - umin, vmax - vmin, 1e-30)
     affine = bool(np.abs(design @ rows - uv).max() <= 1e-5 * scale)
     f = mesh.faces
-    uv_area = 0.5 * np.abs(np.cross(uv[f[:, 1]] - uv[f[:, 0]], uv[f[:, 2]] - uv[f[:, 0]])).sum()
+    e1, e2 = uv[f[:, 1]] - uv[f[:, 0]], uv[f[:, 2]] - uv[f[:, 0]]
+    uv_area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum()
     ratio = float(np.sqrt(uv_area / max(mesh.area(), 1e-30)))
     return UvMapping(affine, rows.T.copy(), ratio if ratio > 0 else 1.0)
 
