@@ -43,6 +43,12 @@ class MapLookup:
 
     def locate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(face, atlas texel (K, 2) as x, y, inside) for points x (K, 3)."""
+        face, texel, ok, _ = self.locate_with_margin(x)
+        return face, texel, ok
+
+    def locate_with_margin(self, x: np.ndarray):
+        """:meth:`locate` plus each point's distance to the nearest texel border
+        (texels): below ~1e-4 the shader's rounding may pick the neighbour."""
         x = x.astype(_F)
         if self.cube:
             d = x - self.light_position.astype(_F)
@@ -61,25 +67,33 @@ class MapLookup:
         safe_w = np.where(ok, w, _F(1))
         ndc = (clip[:, :2] / safe_w[:, None]).astype(_F)
         ok &= np.all(np.abs(ndc) <= 1, axis=1)
-        t = np.floor((ndc * _F(0.5) + _F(0.5)) * _F(self.size))
+        pixel = (ndc * _F(0.5) + _F(0.5)) * _F(self.size)
+        t = np.floor(pixel)
+        margin = np.min(np.minimum(pixel - t, t + 1 - pixel), axis=1)
         t = np.clip(np.where(ok[:, None], t, 0), 0, self.size - 1).astype(np.int64)
         texel = np.stack([face * self.size + t[:, 0], t[:, 1]], axis=1)
-        return face, texel, ok
+        return face, texel, ok, np.where(ok, margin, np.inf)
 
-    def receiver_at(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """T(x) (K, 3) float32 and whether a receiver is there (K,)."""
-        _, texel, ok = self.locate(x)
+    def receiver_at(self, x: np.ndarray, margin: np.ndarray | None = None):
+        """T(x) (K, 3) float32 and whether a receiver is there (K,); ``margin``, if
+        given, is lowered in place to each point's texel-border distance."""
+        _, texel, ok, m = self.locate_with_margin(x)
+        if margin is not None:
+            np.minimum(margin, m, out=margin)
         q = self.atlas[texel[:, 1], texel[:, 0]]
         return q[:, :3].astype(_F), ok & (q[:, 3] > 0.5)
 
 
 @dataclass(frozen=True, eq=False)
 class MirrorResult:
-    """history (K, iterations + 1) estimates (m), distance (K,), status (K,)."""
+    """history (K, iterations + 1) estimates (m), distance (K,), status (K,), and
+    margin (K,): the smallest distance (texels) of any lookup of the vertex to a
+    texel border; where it is ~0 the shader may legitimately read the neighbour."""
 
     history: np.ndarray
     distance: np.ndarray
     status: np.ndarray
+    margin: np.ndarray
 
 
 def _norm(a: np.ndarray) -> np.ndarray:
@@ -113,8 +127,10 @@ def estimate_distances(
     k_count = len(v)
     eps = _F(eps)
 
+    margin = np.full(k_count, np.inf)
+
     def g_of(d):
-        t, ok = lookup.receiver_at(v + d[:, None] * r)
+        t, ok = lookup.receiver_at(v + d[:, None] * r, margin)
         return _norm(t - v), t, ok
 
     hist = np.zeros((k_count, iterations + 1), _F)
@@ -171,7 +187,7 @@ def estimate_distances(
         h_prev = np.where(active, h, h_prev)
         d = np.where(active, prop, d).astype(_F)
         hist[:, k] = d
-    _, ok = lookup.receiver_at(v + d[:, None] * r)
+    _, ok = lookup.receiver_at(v + d[:, None] * r, margin)
     status = np.where((status == HIT) & ~ok, LOST, status)
     hist = np.where((status == LOST)[:, None] & ~ok0[:, None], _F(0), hist)
-    return MirrorResult(hist, d, status.astype(np.int32))
+    return MirrorResult(hist, d, status.astype(np.int32), margin)
