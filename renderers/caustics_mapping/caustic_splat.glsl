@@ -34,7 +34,7 @@ void main() {
     if (!(norm > 0.0)) return;
     float area = map_texel_area(in_hit.xyz, in_normal.xyz, ndc, u_size);
     v_value = in_flux.rgb / (norm * area);
-    v_center = c + vec2(float(face * u_size), 0.0);     // atlas pixels
+    v_center = c + vec2(float(u_map_slot[face] * u_size), 0.0);  // atlas pixels
     gl_PointSize = 2.0 * ceil(u_cut * u_sigma) + 2.0;
     gl_Position = vec4(ndc, 0.0, 1.0);
 }

@@ -42,9 +42,9 @@ def splat_caustic_map(
     ctx.blend_func = moderngl.ONE, moderngl.ONE
     ctx.blend_equation = moderngl.FUNC_ADD
     vaos = [record_vertex_array(program, trace) for trace in traces]
-    for face in faces:
-        fbo.viewport = (face * size, 0, size, size)
-        fbo.scissor = (face * size, 0, size, size)
+    for slot, face in enumerate(light.map_faces):
+        fbo.viewport = (slot * size, 0, size, size)
+        fbo.scissor = (slot * size, 0, size, size)
         set_uniform(program, "u_face", face)
         for vao, trace in zip(vaos, traces):
             vao.render(moderngl.POINTS, vertices=trace.count)

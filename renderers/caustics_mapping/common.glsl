@@ -3,10 +3,11 @@
 // Conventions
 // -----------
 // * World space is right-handed metres, +z up.
-// * A "map atlas" stores the light's map views side by side: view f occupies the
-//   texels x in [f*size, (f+1)*size). A point light has six cube faces
-//   (+x, -x, +y, -y, +z, -z; a direction's face is its major axis), spot and
-//   directional lights one view.
+// * A "map atlas" stores the light's map views side by side: the view in slot s
+//   occupies the texels x in [s*size, (s+1)*size); u_map_slot[face] is a view's
+//   slot, -1 for cube faces that see no receiver (not stored: nothing there). A
+//   point light has six cube faces (+x, -x, +y, -y, +z, -z; a direction's face is
+//   its major axis), spot and directional lights one view.
 // * The receiver positions atlas is RGBA32F: xyz world position (m), w receiver
 //   index + 1 (0 = no receiver seen in that texel). Its companion attachments hold
 //   the receiver normal (xyz) and the receiver (u, v) (xy).
@@ -30,6 +31,7 @@ uniform int u_lambertian;      // 1: intensity * max(cos, 0) about u_light_dir
 // ---------------------------------------------------------------- map views
 uniform mat4 u_map_vp[6];
 uniform int u_map_cube;        // 1: six cube faces, else one view
+uniform int u_map_slot[6];     // atlas slot of each view, -1: not stored
 uniform int u_map_persp;       // 1 perspective (tan half-angle u_map_half), 0 ortho
 uniform float u_map_half;      // tan(half fov) or half-width (m)
 
@@ -84,8 +86,9 @@ bool map_locate(vec3 x, int size, out int face, out vec2 ndc, out ivec2 texel) {
     face = u_map_cube == 1 ? cube_face(x - u_light_pos) : 0;
     bool inside = project(u_map_vp[face], x, ndc);
     ivec2 t = min(ivec2(floor((ndc * 0.5 + 0.5) * float(size))), ivec2(size - 1));
-    texel = ivec2(face * size + t.x, t.y);
-    return inside;
+    int slot = u_map_slot[face];
+    texel = ivec2(max(slot, 0) * size + t.x, t.y);
+    return inside && slot >= 0;
 }
 
 // Solid angle (sr, perspective) or area perpendicular to the light (m^2,

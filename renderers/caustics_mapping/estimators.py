@@ -33,6 +33,9 @@ class MapLookup:
     cube : bool
         Six cube faces chosen by the major axis of x - light_position.
     light_position : ndarray (3,)
+    slots : ndarray (6,) int, optional
+        Atlas slot of each view, -1 where the view is not stored (default: view i in
+        slot i).
     """
 
     atlas: np.ndarray
@@ -40,6 +43,7 @@ class MapLookup:
     size: int
     cube: bool
     light_position: np.ndarray
+    slots: np.ndarray | None = None
 
     def locate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(face, atlas texel (K, 2) as x, y, inside) for points x (K, 3)."""
@@ -67,11 +71,14 @@ class MapLookup:
         safe_w = np.where(ok, w, _F(1))
         ndc = (clip[:, :2] / safe_w[:, None]).astype(_F)
         ok &= np.all(np.abs(ndc) <= 1, axis=1)
+        slots = np.arange(6) if self.slots is None else np.asarray(self.slots)
+        slot = slots[face]
+        ok &= slot >= 0
         pixel = (ndc * _F(0.5) + _F(0.5)) * _F(self.size)
         t = np.floor(pixel)
         margin = np.min(np.minimum(pixel - t, t + 1 - pixel), axis=1)
         t = np.clip(np.where(ok[:, None], t, 0), 0, self.size - 1).astype(np.int64)
-        texel = np.stack([face * self.size + t[:, 0], t[:, 1]], axis=1)
+        texel = np.stack([np.maximum(slot, 0) * self.size + t[:, 0], t[:, 1]], axis=1)
         return face, texel, ok, np.where(ok, margin, np.inf)
 
     def receiver_at(self, x: np.ndarray, margin: np.ndarray | None = None):

@@ -83,6 +83,9 @@ class LightSetup:
     lambertian : bool
         Intensity scales with max(cos, 0) about ``direction`` (area-light samples).
     map_views, object_views : tuple of LightView
+    map_faces : tuple of int
+        The map views stored in the atlases, in slot order (cube faces that see no
+        receiver are left out).
     cube : bool
         The map views are the six cube faces (face chosen by major axis).
     """
@@ -99,6 +102,12 @@ class LightSetup:
     cutoff: float = math.pi
     beam: float = math.pi
     lambertian: bool = False
+    map_faces: tuple[int, ...] = (0,)
+
+    @property
+    def slots(self) -> tuple[int, ...]:
+        """Atlas slot of each map view (-1: not stored), for ``u_map_slot``."""
+        return tuple(self.map_faces.index(f) if f in self.map_faces else -1 for f in range(6))
 
     @property
     def type_code(self) -> int:

@@ -44,13 +44,9 @@ def render_receiver_positions(
     ctx: moderngl.Context, light: LightSetup, receivers: list[GpuMesh], *, size: int,
     faces: tuple[int, ...],
 ) -> ReceiverPositions:
-    """Render every receiver into the map views listed in ``faces``.
-
-    Faces not listed (cube faces that see no receiver) stay cleared: every lookup
-    there reports "no receiver".
-    """
-    views = len(light.map_views)
-    width = views * size
+    """Render every receiver into the map views ``light.map_faces``, one atlas slot
+    each (``faces`` must equal them). Cube faces not stored report "no receiver"."""
+    width = len(light.map_faces) * size
     textures = [ctx.texture((width, size), 4, dtype="f4") for _ in range(3)]
     for tex in textures:
         tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
@@ -63,8 +59,8 @@ def render_receiver_positions(
     ctx.enable(moderngl.DEPTH_TEST)
     ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
     vaos = [mesh.vertex_array(program) for mesh in receivers]
-    for face in faces:
-        fbo.viewport = (face * size, 0, size, size)
+    for slot, face in enumerate(light.map_faces):
+        fbo.viewport = (slot * size, 0, size, size)
         program["u_vp"].write(light.map_views[face].view_proj.T.astype("f4").tobytes())
         for index, vao in enumerate(vaos):
             program["u_receiver"] = index

@@ -7,6 +7,7 @@ and the caustic map, for the CLI's outputs, the NumPy mirror and convergence stu
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import moderngl
@@ -51,8 +52,9 @@ class Frame:
         each iteration, ``distance`` (K,) final d, ``hit`` (K, 3), ``status`` (K,)
         (:data:`.caustic_trace.STATUS`), ``flux`` (K, 3), ``receiver`` (K,), ``view``
         (K,) object view, ``channel`` (K,) (-1 all), ``light`` (K,) light sample.
-    caustic_map : ndarray (M, views * M, 3)
-        The caustic-map atlas (W/m^2), row 0 at the bottom; summed over light samples.
+    caustic_map : ndarray (M, slots * M, 3)
+        The caustic-map atlas (W/m^2), row 0 at the bottom, one slot per stored map
+        view (``metadata["map_faces"]`` in order); summed over light samples.
     lookups : list of MapLookup
         The receiver positions atlas read back, per light sample (for the mirror).
     eps : float
@@ -189,6 +191,7 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry) -> Fra
 
     for light_index, light in enumerate(lights):
         faces = _faces(light, points)
+        light = dataclasses.replace(light, map_faces=faces)
         map_faces.update(faces)
         with timer.measure("receiver_positions"):
             positions = render_receiver_positions(
@@ -197,7 +200,7 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry) -> Fra
         lookups.append(MapLookup(
             positions.read_positions().copy(),
             np.stack([v.view_proj for v in light.map_views]), s.positions_map, light.cube,
-            light.position.copy()))
+            light.position.copy(), np.array(light.slots)))
         traces: list[Trace] = []
         front = back = None
         if caustic_objects:
@@ -223,7 +226,7 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry) -> Fra
                 ran(name)
                 traces.append(trace)
         csize = s.caustic_map
-        caustic = ctx.texture((len(light.map_views) * csize, csize), 4, dtype="f4")
+        caustic = ctx.texture((len(faces) * csize, csize), 4, dtype="f4")
         caustic.filter = (moderngl.NEAREST, moderngl.NEAREST)
         with timer.measure("caustic_map"):
             splat_caustic_map(ctx, light, traces, caustic, size=csize, faces=faces,

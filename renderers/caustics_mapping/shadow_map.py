@@ -21,7 +21,7 @@ def render_shadow_map(
     faces: tuple[int, ...],
 ) -> moderngl.Texture:
     """Nearest caustic-object distance per texel of the map views in ``faces``."""
-    views = len(light.map_views)
+    views = len(light.map_faces)
     target = ctx.texture((views * size, size), 4, dtype="f4")
     target.filter = (moderngl.NEAREST, moderngl.NEAREST)
     depth = ctx.depth_texture((views * size, size))
@@ -33,8 +33,8 @@ def render_shadow_map(
     ctx.enable(moderngl.DEPTH_TEST)
     ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
     vaos = [mesh.vertex_array(program) for mesh in objects]
-    for face in faces:
-        fbo.viewport = (face * size, 0, size, size)
+    for slot, face in enumerate(light.map_faces):
+        fbo.viewport = (slot * size, 0, size, size)
         program["u_vp"].write(light.map_views[face].view_proj.T.astype("f4").tobytes())
         for vao in vaos:
             vao.render(moderngl.TRIANGLES)

@@ -38,6 +38,7 @@ def set_light_uniforms(program: moderngl.Program, light: LightSetup) -> None:
     set_uniform(program, "u_lambertian", int(light.lambertian))
     set_uniform(program, "u_map_vp", _matrices(light.map_views))
     set_uniform(program, "u_map_cube", int(light.cube))
+    set_uniform(program, "u_map_slot", np.array(light.slots, np.int32))
     set_uniform(program, "u_map_persp", int(light.map_views[0].perspective))
     set_uniform(program, "u_map_half", float(light.map_views[0].half_size))
 
