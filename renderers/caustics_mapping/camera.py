@@ -62,7 +62,7 @@ def _plane(geometry: SceneGeometry) -> tuple[float, float, float, float]:
 
 
 def render_camera(
-    ctx: moderngl.Context, light: LightSetup, camera: Camera, geometry: SceneGeometry,
+    ctx: moderngl.Context, light: LightSetup, *, camera: Camera, geometry: SceneGeometry,
     receivers: list[GpuMesh], objects: list[GpuMesh], inputs: CameraInputs,
 ) -> np.ndarray:
     """Render the camera image (W m^-2 sr^-1), row 0 at the top."""
@@ -95,7 +95,7 @@ def render_camera(
                 tex.use(location=unit)
                 set_uniform(program, name, unit)
     receiver_program, object_program = programs
-    for index, (mesh, geo) in enumerate(zip(receivers, geometry.receivers)):
+    for index, (mesh, geo) in enumerate(zip(receivers, geometry.receivers, strict=False)):
         set_uniform(receiver_program, "u_receiver", index)
         set_uniform(receiver_program, "u_albedo", tuple(float(x) for x in geo.albedo))
         vao = mesh.vertex_array(receiver_program)
@@ -104,7 +104,7 @@ def render_camera(
     set_uniform(object_program, "u_plane", _plane(geometry))
     set_uniform(object_program, "u_plane_albedo",
                 tuple(float(x) for x in geometry.receivers[0].albedo))
-    for mesh, geo in zip(objects, geometry.objects):
+    for mesh, geo in zip(objects, geometry.objects, strict=False):
         material = geo.material
         if isinstance(material, DielectricMaterial):
             set_uniform(object_program, "u_material", 1)

@@ -46,7 +46,7 @@ def splat_caustic_map(
         fbo.viewport = (slot * size, 0, size, size)
         fbo.scissor = (slot * size, 0, size, size)
         set_uniform(program, "u_face", face)
-        for vao, trace in zip(vaos, traces):
+        for vao, trace in zip(vaos, traces, strict=False):
             vao.render(moderngl.POINTS, vertices=trace.count)
     fbo.scissor = None
     ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)

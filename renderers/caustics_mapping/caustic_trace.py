@@ -56,7 +56,7 @@ def material_table(materials, closed: list[bool], effects: tuple[str, ...]) -> M
     if len(materials) > MAX_OBJECTS:
         raise ValueError(f"at most {MAX_OBJECTS} caustic objects are supported")
     code, ior, absorption, reflectance, fresnel = [], [], [], [], []
-    for material, is_closed in zip(materials, closed):
+    for material, is_closed in zip(materials, closed, strict=False):
         if isinstance(material, DielectricMaterial):
             code.append(1 if is_closed else 2)
             ior.append(material.iors)
@@ -118,8 +118,8 @@ class Trace:
 
 
 def run_caustic_trace(
-    ctx: moderngl.Context, light: LightSetup, positions: ReceiverPositions,
-    front: ObjectSurfaces, back: ObjectSurfaces | None, materials: MaterialTable, *,
+    ctx: moderngl.Context, light: LightSetup, *, positions: ReceiverPositions,
+    front: ObjectSurfaces, back: ObjectSurfaces | None, materials: MaterialTable,
     grid: int, estimator: str, iterations: int, safeguarded: bool, eps: float,
     channel: int = -1, paper: bool = False, covered: int = 0, exit_iterations: int = 8,
 ) -> Trace:

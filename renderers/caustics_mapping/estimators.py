@@ -168,7 +168,7 @@ def estimate_distances(
             elif estimator == "newton":
                 f = _norm(t - (v + d[:, None] * r))
                 de = (d + eps).astype(_F)
-                g2, t2, ok2 = g_of(de)
+                _g2, t2, ok2 = g_of(de)
                 lost2 = active & (h != 0) & ~ok2
                 status = np.where(lost2, LOST, status)
                 active &= ~lost2

@@ -173,7 +173,7 @@ def _cube(eye: np.ndarray, points: np.ndarray) -> tuple[LightView, ...]:
     proj = perspective(1.0, near, far)
     return tuple(
         LightView(name, proj @ look_at(eye, fwd, up), True, 1.0)
-        for name, (fwd, up) in zip(CUBE_FACES, _CUBE_AXES)
+        for name, (fwd, up) in zip(CUBE_FACES, _CUBE_AXES, strict=False)
     )
 
 
@@ -191,8 +191,8 @@ def _fitted_perspective(eye: np.ndarray, points: np.ndarray, name: str):
     t = math.tan(half) * 1.02
     near = max((dist - radius) * 0.9, dist * 1e-4)
     far = dist + radius * 1.1
-    return LightView(name, perspective(t, near, far) @ look_at(eye, center - eye, _up_for(center - eye)),
-                     True, t)
+    view = look_at(eye, center - eye, _up_for(center - eye))
+    return LightView(name, perspective(t, near, far) @ view, True, t)
 
 
 def _orthographic_fit(direction: np.ndarray, points: np.ndarray, name: str) -> LightView:

@@ -10,7 +10,9 @@ from renderers.caustics_mapping.uniforms import set_uniform
 __all__ = ["lowpass_filter"]
 
 
-def lowpass_filter(ctx: moderngl.Context, source: moderngl.Texture, *, size: int) -> moderngl.Texture:
+def lowpass_filter(
+    ctx: moderngl.Context, source: moderngl.Texture, *, size: int
+) -> moderngl.Texture:
     """A 3x3 binomial blur of the caustic-map atlas ``source`` (RGBA32F), per face."""
     target = ctx.texture(source.size, 4, dtype="f4")
     target.filter = (moderngl.NEAREST, moderngl.NEAREST)

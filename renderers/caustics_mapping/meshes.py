@@ -24,7 +24,7 @@ class GpuMesh:
         names = ("in_position", "in_normal", "in_uv")
         sizes = (12, 12, 8)
         fmt, attrs = [], []
-        for name, size in zip(names, sizes):
+        for name, size in zip(names, sizes, strict=False):
             if name in program:
                 fmt.append(f"{size // 4}f")
                 attrs.append(name)

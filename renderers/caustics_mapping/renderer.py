@@ -125,7 +125,7 @@ def _read_rgba(texture: moderngl.Texture) -> np.ndarray:
 
 def render_frame(
     scene: Scene, *, ctx: moderngl.Context | None = None,
-    geometry: SceneGeometry | None = None,
+    geometry: SceneGeometry | None = None, lookups: bool = True,
 ) -> Frame:
     """Render ``scene`` with caustics mapping; see :class:`Frame`.
 
@@ -135,6 +135,9 @@ def render_frame(
         A context from :func:`.create_context` (one is made and released if None).
     geometry : SceneGeometry, optional
         The scene's meshes (``build_geometry(scene)`` if None).
+    lookups : bool
+        Read the receiver positions atlases back into ``Frame.lookups`` (for the
+        NumPy mirror); off in :func:`render`, where nothing needs them.
 
     Raises
     ------
@@ -144,7 +147,7 @@ def render_frame(
     own = ctx is None
     ctx = ctx or create_context()
     try:
-        return _render(scene, ctx, geometry or build_geometry(scene))
+        return _render(scene, ctx, geometry or build_geometry(scene), lookups)
     finally:
         if own:
             ctx.release()
@@ -153,10 +156,11 @@ def render_frame(
 def render(scene: Scene, *, ctx: moderngl.Context | None = None,
            geometry: SceneGeometry | None = None) -> RenderResult:
     """Render ``scene``; the :class:`RenderResult` of :func:`render_frame`."""
-    return render_frame(scene, ctx=ctx, geometry=geometry).result
+    return render_frame(scene, ctx=ctx, geometry=geometry, lookups=False).result
 
 
-def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry) -> Frame:
+def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
+            want_lookups: bool) -> Frame:
     s = scene.settings
     effects = effects_of(scene)
     timer = PassTimer(ctx)
@@ -189,18 +193,19 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry) -> Fra
     lights = light_setups(scene, geometry)
     paths = _paths(scene, effects)
 
-    for light_index, light in enumerate(lights):
-        faces = _faces(light, points)
-        light = dataclasses.replace(light, map_faces=faces)
+    for light_index, sample in enumerate(lights):
+        faces = _faces(sample, points)
+        light = dataclasses.replace(sample, map_faces=faces)
         map_faces.update(faces)
         with timer.measure("receiver_positions"):
             positions = render_receiver_positions(
                 ctx, light, receivers, size=s.positions_map, faces=faces)
         ran("receiver_positions")
-        lookups.append(MapLookup(
-            positions.read_positions().copy(),
-            np.stack([v.view_proj for v in light.map_views]), s.positions_map, light.cube,
-            light.position.copy(), np.array(light.slots)))
+        if want_lookups:
+            lookups.append(MapLookup(
+                positions.read_positions().copy(),
+                np.stack([v.view_proj for v in light.map_views]), s.positions_map,
+                light.cube, light.position.copy(), np.array(light.slots)))
         traces: list[Trace] = []
         front = back = None
         if caustic_objects:
@@ -219,7 +224,8 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry) -> Fra
                     f".{_CHANNELS[channel]}" if channel >= 0 else "")
                 with timer.measure(name):
                     trace = run_caustic_trace(
-                        ctx, light, positions, front, back, materials, grid=s.grid,
+                        ctx, light, positions=positions, front=front, back=back,
+                        materials=materials, grid=s.grid,
                         estimator=s.estimator, iterations=s.iterations,
                         safeguarded=s.safeguarded, eps=eps, channel=channel, paper=paper,
                         covered=front.covered)
@@ -256,12 +262,12 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry) -> Fra
         inputs = CameraInputs(shadow, s.shadow_map, caustic, csize, positions.positions,
                               s.positions_map, scene.info.direct_lighting, 1e-3 * diag)
         with timer.measure("camera"):
-            camera += render_camera(ctx, light, scene.camera, geometry, receivers, objects,
-                                    inputs)
+            camera += render_camera(ctx, light, camera=scene.camera, geometry=geometry,
+                                    receivers=receivers, objects=objects, inputs=inputs)
         ran("camera")
         atlas = _read_rgba(caustic)[:, :, :3]
         caustic_total = atlas.copy() if caustic_total is None else caustic_total + atlas
-        for channel, trace in zip(channels, traces):
+        for channel, trace in zip(channels, traces, strict=False):
             data = trace.read()
             data["channel"] = np.full(trace.count, channel, np.int32)
             data["light"] = np.full(trace.count, light_index, np.int32)
@@ -302,7 +308,8 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry) -> Fra
     }
     result = RenderResult(
         renderer="caustics_mapping", camera=camera,
-        receivers=tuple(ReceiverMap(m, g.extent) for m, g in zip(maps, geometry.receivers)),
+        receivers=tuple(ReceiverMap(m, g.extent)
+                        for m, g in zip(maps, geometry.receivers, strict=True)),
         effects=effects, timings=dict(timer.timings), timer=timer.timer, metadata=metadata,
     )
     if caustic_total is None:

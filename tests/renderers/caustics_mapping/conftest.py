@@ -13,7 +13,8 @@ from harness.scene import load_scene, with_settings
 from renderers.caustics_mapping import create_context
 
 ROOT = Path(__file__).resolve().parents[3]
-SCENES = sorted((ROOT / "scenes").glob("*.toml")) + sorted((ROOT / "scenes" / "hard").glob("*.toml"))
+SCENES = sorted((ROOT / "scenes").glob("*.toml")) + sorted(
+    (ROOT / "scenes" / "hard").glob("*.toml"))
 
 #: Small settings so every scene renders in well under a second on llvmpipe.
 SMALL = {"grid": 48, "caustic_map": 128, "positions_map": 128, "shadow_map": 128,
