@@ -18,6 +18,7 @@ __all__ = ["COMMAND_MODULES", "default_scene_path", "main"]
 COMMAND_MODULES = (
     "harness.scene_commands",
     "renderers.mitsuba.cli",
+    "renderers.caustics_mapping.cli",
 )
 
 

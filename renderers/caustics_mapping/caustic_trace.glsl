@@ -1,0 +1,276 @@
+// Pass 3a: the vertex grid (paper Section 3.3). One vertex per object-atlas texel
+// (gl_VertexID -> view, texel). Each covered texel refracts or reflects the light,
+// estimates where the ray meets the receivers from the receiver positions atlas,
+// and writes one record; nothing is rasterised (the splat passes draw the records
+// as point sprites).
+//
+// Records (std430, binding 0), five vec4 per grid vertex:
+//   0: xyz ray origin v (m), w object view index
+//   1: xyz unit ray direction r, w estimated distance d (m)
+//   2: xyz estimated hit P = v + d r (m), w status (STATUS_* in common.glsl)
+//   3: rgb flux Phi (W; paper units in paper mode), w receiver index (-1: none)
+//   4: xyz receiver normal at the hit, w 0
+// History (binding 1): u_iterations + 1 floats per vertex, the estimate after
+// 0, 1, ..., u_iterations updates (entry 0 is the start d_1 = g(0)); after a
+// lost lookup or a divergence the last estimate is repeated.
+//
+// Estimators, with P(d) = v + d r, T(x) the receiver position at x's light-space
+// projection, g(d) = |T(P(d)) - v|, h(d) = g(d) - d:
+//   modified (paper):     d <- g(d)
+//   newton (appendix):    f(d) = |T(P(d)) - P(d)|, d <- d - f(d) eps / (f(d+eps) - f(d))
+//   secant (distance impostors): d <- d - h(d) (d - d_prev) / (h(d) - h(d_prev))
+// all starting from d_0 = 0, d_1 = g(0) (the receiver seen along the light ray).
+// Safeguarded: a bracket [lo, hi] with h(lo) >= 0 >= h(hi) is kept from every
+// lookup; an update that is non-finite, leaves the bracket, or oscillates (reverses
+// direction without at least halving the step, from the last two estimates) is
+// replaced by bisection of the bracket (or by the modified step while no upper end
+// is known).
+#include "common.glsl"
+
+layout(std430, binding = 0) writeonly buffer Records { vec4 records[]; };
+layout(std430, binding = 1) writeonly buffer History { float history[]; };
+
+uniform sampler2D u_receiver_positions;   // map atlas, RGBA32F (see common.glsl)
+uniform sampler2D u_receiver_normals;
+uniform int u_positions_size;
+uniform sampler2D u_front_positions;      // object atlas, RGBA32F xyz, w object + 1
+uniform sampler2D u_front_normals;
+uniform sampler2D u_back_positions;
+uniform sampler2D u_back_normals;
+uniform int u_grid;
+uniform mat4 u_obj_vp[6];
+uniform int u_obj_cube;
+uniform int u_obj_persp;
+uniform float u_obj_half;
+
+uniform int u_material[8];      // 0 none, 1 closed dielectric, 2 open dielectric, 3 conductor
+uniform vec3 u_ior[8];
+uniform vec3 u_absorption[8];   // K_a (1/m)
+uniform vec3 u_reflectance[8];
+uniform int u_fresnel[8];
+uniform int u_channel;          // -1: all channels; c: this pass carries channel c only
+
+uniform int u_paper;            // 1: the paper's Eq. 6 flux, (N.L) / V
+uniform float u_covered;        // V, grid texels covered (occlusion query)
+uniform int u_estimator;        // 0 modified, 1 newton, 2 secant
+uniform int u_safeguarded;
+uniform int u_iterations;
+uniform float u_eps;            // Newton's finite-difference step (m)
+uniform int u_exit_iterations;  // refinements of the exit point (double refraction)
+
+const int STATUS_NO_EXIT = 5;   // double refraction found no exit surface
+
+#if defined VERTEX_SHADER
+
+// T(x): the receiver seen from the light through x; false when there is none.
+bool receiver_at(vec3 x, out vec4 t, out ivec2 texel) {
+    int face;
+    vec2 ndc;
+    t = vec4(0.0);
+    if (!map_locate(x, u_positions_size, face, ndc, texel)) return false;
+    t = texelFetch(u_receiver_positions, texel, 0);
+    return t.w > 0.5;
+}
+
+bool lookup_g(vec3 v, vec3 r, float d, out float g, out vec3 t) {
+    vec4 q;
+    ivec2 texel;
+    bool ok = receiver_at(v + d * r, q, texel);
+    t = q.xyz;
+    g = length(q.xyz - v);
+    return ok;
+}
+
+// The exit surface at x's projection into the object views.
+bool back_at(vec3 x, int object, out vec3 p, out vec3 n) {
+    int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
+    vec2 ndc;
+    p = vec3(0.0);
+    n = vec3(0.0);
+    if (!project(u_obj_vp[face], x, ndc)) return false;
+    ivec2 t = min(ivec2(floor((ndc * 0.5 + 0.5) * float(u_grid))), ivec2(u_grid - 1));
+    ivec2 a = ivec2(face * u_grid + t.x, t.y);
+    vec4 q = texelFetch(u_back_positions, a, 0);
+    p = q.xyz;
+    n = texelFetch(u_back_normals, a, 0).xyz;
+    return abs(q.w - float(object + 1)) < 0.5;
+}
+
+int estimate(vec3 v, vec3 r, int hbase, out float d_out) {
+    float g0;
+    vec3 t;
+    d_out = 0.0;
+    if (!lookup_g(v, r, 0.0, g0, t)) {
+        for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
+        return STATUS_LOST;
+    }
+    float d = g0, d_prev = 0.0, h_prev = g0;
+    float lo = 0.0, hi = -1.0;   // bracket of the root of h; hi < 0: no upper end yet
+    int status = STATUS_HIT;
+    history[hbase] = d;
+    for (int k = 1; k <= u_iterations; ++k) {
+        float g;
+        if (status == STATUS_HIT && !lookup_g(v, r, d, g, t)) status = STATUS_LOST;
+        if (status != STATUS_HIT) { history[hbase + k] = d; continue; }
+        float h = g - d;
+        if (h >= 0.0) lo = max(lo, d); else hi = hi < 0.0 ? d : min(hi, d);
+        float prop = d;
+        bool finite = true;
+        if (h == 0.0) {
+            prop = d;                               // at the root
+        } else if (u_estimator == 0) {
+            prop = g;                               // modified: d <- g(d)
+        } else if (u_estimator == 2) {
+            float den = h - h_prev;                 // secant on h
+            if (den != 0.0) prop = d - h * (d - d_prev) / den; else finite = false;
+        } else {
+            float f = length(t - (v + d * r));      // Newton on f, forward difference
+            float g2;
+            vec3 t2;
+            if (!lookup_g(v, r, d + u_eps, g2, t2)) {
+                status = STATUS_LOST;
+                history[hbase + k] = d;
+                continue;
+            }
+            float fe = length(t2 - (v + (d + u_eps) * r));
+            float den = fe - f;
+            if (f == 0.0) prop = d;
+            else if (den != 0.0) prop = d - f * u_eps / den;
+            else finite = false;
+        }
+        if (!(abs(prop) < 1e30)) finite = false;
+        if (u_safeguarded == 1) {
+            bool osc = k >= 2 && (prop - d) * (d - d_prev) < 0.0
+                && abs(prop - d) >= 0.5 * abs(d - d_prev);
+            bool outside = prop < lo || (hi >= 0.0 && prop > hi);
+            if (!finite || osc || outside) prop = hi >= 0.0 ? 0.5 * (lo + hi) : g;
+        } else if (!finite) {
+            status = STATUS_DIVERGED;
+            history[hbase + k] = d;
+            continue;
+        }
+        d_prev = d;
+        h_prev = h;
+        d = prop;
+        history[hbase + k] = d;
+    }
+    d_out = d;
+    return status;
+}
+
+void write_record(int base, vec3 v, float view, vec3 r, float d, vec3 p, int status,
+                  vec3 flux, float receiver, vec3 normal) {
+    records[base + 0] = vec4(v, view);
+    records[base + 1] = vec4(r, d);
+    records[base + 2] = vec4(p, float(status));
+    records[base + 3] = vec4(flux, receiver);
+    records[base + 4] = vec4(normal, 0.0);
+}
+
+void main() {
+    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);    // clipped: this pass rasterises nothing
+    gl_PointSize = 1.0;
+    int id = gl_VertexID;
+    int per_view = u_grid * u_grid;
+    int view = id / per_view;
+    int local = id - view * per_view;
+    int tx = local % u_grid;
+    int ty = local / u_grid;
+    int base = id * 5;
+    int hbase = id * (u_iterations + 1);
+    ivec2 a = ivec2(view * u_grid + tx, ty);
+    vec4 fp = texelFetch(u_front_positions, a, 0);
+    int object = int(fp.w + 0.5) - 1;
+    if (object < 0 || u_material[object] == 0) {
+        for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
+        write_record(base, vec3(0.0), float(view), vec3(0.0), 0.0, vec3(0.0), STATUS_EMPTY,
+                     vec3(0.0), -1.0, vec3(0.0));
+        return;
+    }
+    vec3 v = fp.xyz;
+    vec3 l = incident_dir(v);
+    vec3 n = texelFetch(u_front_normals, a, 0).xyz;
+    if (dot(n, l) > 0.0) n = -n;               // face the light (two-sided surfaces)
+
+    // Flux carried by this grid texel (DESIGN.md, radiometric contract): I * the
+    // texel's solid angle (point, spot) or E0 * its area across the beam
+    // (directional); or the paper's Eq. 6, (N . L) / V in units of the light's power.
+    vec3 flux;
+    if (u_paper == 1) {
+        flux = u_light_power * max(dot(n, -l), 0.0) / max(u_covered, 1.0);
+    } else {
+        vec2 ndc = (vec2(tx, ty) + 0.5) / float(u_grid) * 2.0 - 1.0;
+        flux = u_light_power * light_falloff(l) * texel_measure(u_obj_persp, u_obj_half, u_grid, ndc);
+    }
+    vec3 mask = u_channel < 0 ? vec3(1.0) : vec3(equal(ivec3(0, 1, 2), ivec3(u_channel)));
+    flux *= mask;
+    float ior = u_channel < 0 ? u_ior[object].x : u_ior[object][u_channel];
+    int material = u_material[object];
+    bool fresnel = u_fresnel[object] == 1;
+
+    vec3 r;
+    float inside = 0.0;                         // path length in the medium (m)
+    if (material == 3) {
+        r = reflect(l, n);
+        flux *= u_reflectance[object];
+    } else {
+        r = refract(l, n, 1.0 / ior);
+        if (fresnel) flux *= fresnel_transmittance(-dot(l, n), 1.0, ior);
+    }
+    if (material == 1) {
+        // Wyman 2005: the exit point is looked up in the back-surface texture. Start
+        // from the back surface along the light ray through v (his d_V) and refine
+        // along the refracted ray: d <- |B(v + d r) - v|.
+        vec3 bp, bn;
+        if (!back_at(v, object, bp, bn)) {
+            for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
+            write_record(base, v, float(view), r, 0.0, v, STATUS_NO_EXIT, flux, -1.0, vec3(0.0));
+            return;
+        }
+        float d = length(bp - v);
+        for (int k = 0; k < u_exit_iterations; ++k) {
+            vec3 bq, bm;
+            if (!back_at(v + d * r, object, bq, bm)) break;
+            d = length(bq - v);
+            bn = bm;
+        }
+        inside = d;
+        vec3 exit_point = v + d * r;
+        vec3 m = dot(r, bn) > 0.0 ? -bn : bn;   // exit normal facing the inside ray
+        vec3 r2 = refract(r, m, ior);
+        if (fresnel) flux *= fresnel_transmittance(-dot(r, m), ior, 1.0);
+        if (dot(r2, r2) == 0.0) {
+            for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
+            write_record(base, exit_point, float(view), r, 0.0, exit_point, STATUS_TIR, flux,
+                         -1.0, vec3(0.0));
+            return;
+        }
+        v = exit_point;
+        r = r2;
+        flux *= exp(-u_absorption[object] * inside);  // Eq. 7 inside the solid
+    }
+
+    float d;
+    int status = estimate(v, r, hbase, d);
+    vec3 p = v + d * r;
+    float receiver = -1.0;
+    vec3 normal = vec3(0.0);
+    if (status == STATUS_HIT) {
+        vec4 t;
+        ivec2 texel;
+        if (receiver_at(p, t, texel)) {
+            receiver = t.w - 1.0;
+            normal = texelFetch(u_receiver_normals, texel, 0).xyz;
+        } else {
+            status = STATUS_LOST;
+        }
+    }
+    // Eq. 7 for a water surface: attenuation from the surface to the receiver.
+    if (material == 2) flux *= exp(-u_absorption[object] * max(d, 0.0));
+    write_record(base, v, float(view), r, d, p, status, flux, receiver, normal);
+}
+
+#elif defined FRAGMENT_SHADER
+out vec4 out_color;
+void main() { out_color = vec4(0.0); }
+#endif

@@ -1,0 +1,173 @@
+"""Pass 3a: refract or reflect at every grid vertex and estimate the receiver hit.
+
+Runs ``caustic_trace.glsl`` as a vertex shader over the ``grid`` x ``grid`` vertices
+of every object view, writing one record per vertex into a shader storage buffer
+(layout in the shader's header) and the estimate after every iteration into a
+second. The splat passes draw the record buffer as point sprites; the renderer reads
+both back for ``hits.npz`` and for the NumPy mirror in :mod:`.estimators`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+
+from harness.scene.model import ConductorMaterial, DielectricMaterial
+from renderers.caustics_mapping.context import load_program
+from renderers.caustics_mapping.lights import LightSetup
+from renderers.caustics_mapping.object_positions import ObjectSurfaces
+from renderers.caustics_mapping.receiver_positions import ReceiverPositions
+from renderers.caustics_mapping.uniforms import (
+    set_light_uniforms,
+    set_object_view_uniforms,
+    set_uniform,
+)
+
+__all__ = ["ESTIMATORS", "STATUS", "MaterialTable", "Trace", "material_table", "run_caustic_trace"]
+
+#: Estimator names and their shader codes.
+ESTIMATORS = {"modified": 0, "newton": 1, "secant": 2}
+#: Record status codes (``common.glsl`` and ``caustic_trace.glsl``).
+STATUS = {"empty": 0, "hit": 1, "lost": 2, "tir": 3, "diverged": 4, "no_exit": 5}
+#: Largest number of caustic objects one render handles.
+MAX_OBJECTS = 8
+RECORD_FLOATS = 20
+
+
+@dataclass(frozen=True)
+class MaterialTable:
+    """Per-object material uniforms (index = object index).
+
+    ``code``: 0 no caustic (diffuse), 1 closed dielectric (double refraction),
+    2 open dielectric (single refraction), 3 conductor (reflection).
+    """
+
+    code: tuple[int, ...]
+    ior: tuple[tuple[float, float, float], ...]
+    absorption: tuple[tuple[float, float, float], ...]
+    reflectance: tuple[tuple[float, float, float], ...]
+    fresnel: tuple[int, ...]
+
+
+def material_table(materials, closed: list[bool], effects: tuple[str, ...]) -> MaterialTable:
+    """Build the table from the objects' materials; Fresnel only with the effect."""
+    if len(materials) > MAX_OBJECTS:
+        raise ValueError(f"at most {MAX_OBJECTS} caustic objects are supported")
+    code, ior, absorption, reflectance, fresnel = [], [], [], [], []
+    for material, is_closed in zip(materials, closed, strict=False):
+        if isinstance(material, DielectricMaterial):
+            code.append(1 if is_closed else 2)
+            ior.append(material.iors)
+            absorption.append(material.absorption if "absorption" in effects else (0.0,) * 3)
+            reflectance.append((0.0,) * 3)
+            fresnel.append(int(material.fresnel and "fresnel" in effects))
+        elif isinstance(material, ConductorMaterial):
+            code.append(3)
+            ior.append((1.0,) * 3)
+            absorption.append((0.0,) * 3)
+            reflectance.append(material.reflectance)
+            fresnel.append(0)
+        else:
+            code.append(0)
+            ior.append((1.0,) * 3)
+            absorption.append((0.0,) * 3)
+            reflectance.append((0.0,) * 3)
+            fresnel.append(0)
+    return MaterialTable(tuple(code), tuple(ior), tuple(absorption), tuple(reflectance),
+                         tuple(fresnel))
+
+
+@dataclass(eq=False)
+class Trace:
+    """GPU buffers of one trace pass.
+
+    Attributes
+    ----------
+    records : moderngl.Buffer
+        ``count`` x 5 vec4 (see ``caustic_trace.glsl``).
+    history : moderngl.Buffer
+        ``count`` x (iterations + 1) float32 estimates (m).
+    count, iterations : int
+    """
+
+    records: moderngl.Buffer
+    history: moderngl.Buffer
+    count: int
+    iterations: int
+
+    def read(self) -> dict[str, np.ndarray]:
+        """The records as arrays: origin (K, 3), direction (K, 3), distance (K,),
+        hit (K, 3), status (K,) int, flux (K, 3), receiver (K,) int, normal (K, 3),
+        view (K,) int, history (K, iterations + 1)."""
+        rec = np.frombuffer(self.records.read(), np.float32).reshape(self.count, 5, 4)
+        hist = np.frombuffer(self.history.read(), np.float32).reshape(
+            self.count, self.iterations + 1)
+        return {
+            "origin": rec[:, 0, :3].copy(), "view": rec[:, 0, 3].astype(np.int32),
+            "direction": rec[:, 1, :3].copy(), "distance": rec[:, 1, 3].copy(),
+            "hit": rec[:, 2, :3].copy(), "status": rec[:, 2, 3].astype(np.int32),
+            "flux": rec[:, 3, :3].copy(), "receiver": np.rint(rec[:, 3, 3]).astype(np.int32),
+            "normal": rec[:, 4, :3].copy(), "history": hist.copy(),
+        }
+
+    def release(self) -> None:
+        self.records.release()
+        self.history.release()
+
+
+def run_caustic_trace(
+    ctx: moderngl.Context, light: LightSetup, *, positions: ReceiverPositions,
+    front: ObjectSurfaces, back: ObjectSurfaces | None, materials: MaterialTable,
+    grid: int, estimator: str, iterations: int, safeguarded: bool, eps: float,
+    channel: int = -1, paper: bool = False, covered: int = 0, exit_iterations: int = 8,
+) -> Trace:
+    """Run the vertex grid once; returns the record and history buffers.
+
+    Parameters
+    ----------
+    channel : int
+        -1 for all channels, else the one channel (and its IOR) this dispersion
+        pass carries.
+    paper, covered : bool, int
+        The paper's Eq. 6 flux with V = ``covered`` grid texels.
+    exit_iterations : int
+        Refinements of the image-space exit point (double refraction).
+    """
+    count = len(light.object_views) * grid * grid
+    records = ctx.buffer(reserve=count * RECORD_FLOATS * 4)
+    history = ctx.buffer(reserve=count * (iterations + 1) * 4)
+    program = load_program(ctx, "caustic_trace.glsl")
+    set_light_uniforms(program, light)
+    set_object_view_uniforms(program, light)
+    units = {"u_receiver_positions": positions.positions, "u_receiver_normals": positions.normals,
+             "u_front_positions": front.positions, "u_front_normals": front.normals}
+    if back is not None:
+        units |= {"u_back_positions": back.positions, "u_back_normals": back.normals}
+    for unit, (name, tex) in enumerate(units.items()):
+        tex.use(location=unit)
+        set_uniform(program, name, unit)
+    pad = MAX_OBJECTS - len(materials.code)
+    set_uniform(program, "u_material", np.array(materials.code + (0,) * pad, np.int32))
+    for name, values in (("u_ior", materials.ior), ("u_absorption", materials.absorption),
+                         ("u_reflectance", materials.reflectance)):
+        set_uniform(program, name, np.array(values + ((0.0,) * 3,) * pad, np.float32))
+    set_uniform(program, "u_fresnel", np.array(materials.fresnel + (0,) * pad, np.int32))
+    set_uniform(program, "u_positions_size", positions.size)
+    set_uniform(program, "u_grid", grid)
+    set_uniform(program, "u_channel", channel)
+    set_uniform(program, "u_paper", int(paper))
+    set_uniform(program, "u_covered", float(covered))
+    set_uniform(program, "u_estimator", ESTIMATORS[estimator])
+    set_uniform(program, "u_safeguarded", int(safeguarded))
+    set_uniform(program, "u_iterations", iterations)
+    set_uniform(program, "u_eps", float(eps))
+    set_uniform(program, "u_exit_iterations", exit_iterations)
+    records.bind_to_storage_buffer(0)
+    history.bind_to_storage_buffer(1)
+    vao = ctx.vertex_array(program, [])
+    vao.render(moderngl.POINTS, vertices=count)
+    ctx.memory_barrier()
+    vao.release()
+    return Trace(records, history, count, iterations)

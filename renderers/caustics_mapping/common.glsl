@@ -1,0 +1,147 @@
+// Shared GLSL of the caustics-mapping passes (included by every .glsl here).
+//
+// Conventions
+// -----------
+// * World space is right-handed metres, +z up.
+// * A "map atlas" stores the light's map views side by side: the view in slot s
+//   occupies the texels x in [s*size, (s+1)*size); u_map_slot[face] is a view's
+//   slot, -1 for cube faces that see no receiver (not stored: nothing there). A
+//   point light has six cube faces (+x, -x, +y, -y, +z, -z; a direction's face is
+//   its major axis), spot and directional lights one view.
+// * The receiver positions atlas is RGBA32F: xyz world position (m), w receiver
+//   index + 1 (0 = no receiver seen in that texel). Its companion attachments hold
+//   the receiver normal (xyz) and the receiver (u, v) (xy).
+// * Lookups are nearest-texel (texelFetch), exactly what the NumPy mirror in
+//   estimators.py does, so the two can be compared number for number.
+
+const int STATUS_EMPTY = 0;     // no caustic object at this grid texel
+const int STATUS_HIT = 1;       // splatted
+const int STATUS_LOST = 2;      // a lookup found no receiver: splat dropped
+const int STATUS_TIR = 3;       // total internal reflection at the exit surface
+const int STATUS_DIVERGED = 4;  // the estimator produced a non-finite update
+
+// ---------------------------------------------------------------- the light
+uniform int u_light_type;      // 0 point, 1 spot, 2 directional
+uniform vec3 u_light_pos;      // m (point, spot)
+uniform vec3 u_light_dir;      // travel direction / spot axis / area-sample normal
+uniform vec3 u_light_power;    // I (W/sr) or E0 (W/m^2)
+uniform vec4 u_spot;           // cos cutoff, cos beam, cutoff (rad), beam (rad)
+uniform int u_lambertian;      // 1: intensity * max(cos, 0) about u_light_dir
+
+// ---------------------------------------------------------------- map views
+uniform mat4 u_map_vp[6];
+uniform int u_map_cube;        // 1: six cube faces, else one view
+uniform int u_map_slot[6];     // atlas slot of each view, -1: not stored
+uniform int u_map_persp;       // 1 perspective (tan half-angle u_map_half), 0 ortho
+uniform float u_map_half;      // tan(half fov) or half-width (m)
+
+// Unit direction light travels at x.
+vec3 incident_dir(vec3 x) {
+    return u_light_type == 2 ? u_light_dir : normalize(x - u_light_pos);
+}
+
+// Relative intensity along the unit travel direction l: spot cone (linear in angle
+// between beam width and cutoff, like Mitsuba's spot) and the Lambertian cosine of
+// an area-light sample.
+float light_falloff(vec3 l) {
+    float f = 1.0;
+    if (u_light_type == 1) {
+        float c = dot(l, u_light_dir);
+        if (c <= u_spot.x) return 0.0;
+        if (c < u_spot.y) f = (u_spot.z - acos(clamp(c, -1.0, 1.0))) / (u_spot.z - u_spot.w);
+    }
+    if (u_lambertian == 1) f *= max(dot(l, u_light_dir), 0.0);
+    return f;
+}
+
+// Direct irradiance (W/m^2) on a surface at x with unit normal n, no occlusion.
+vec3 direct_irradiance(vec3 x, vec3 n) {
+    vec3 l = incident_dir(x);
+    float c = max(dot(n, -l), 0.0);
+    if (u_light_type == 2) return u_light_power * c;
+    vec3 dx = x - u_light_pos;
+    return u_light_power * light_falloff(l) * c / max(dot(dx, dx), 1e-30);
+}
+
+// Cube face of direction d: major axis, ties broken x, then y, then z.
+int cube_face(vec3 d) {
+    vec3 a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) return d.x >= 0.0 ? 0 : 1;
+    if (a.y >= a.z) return d.y >= 0.0 ? 2 : 3;
+    return d.z >= 0.0 ? 4 : 5;
+}
+
+// Normalised device coordinates of x in view vp; false behind or outside it.
+bool project(mat4 vp, vec3 x, out vec2 ndc) {
+    vec4 c = vp * vec4(x, 1.0);
+    ndc = vec2(0.0);
+    if (!(c.w > 0.0)) return false;
+    ndc = c.xy / c.w;
+    return abs(ndc.x) <= 1.0 && abs(ndc.y) <= 1.0;
+}
+
+// Locates x in the map views: its face, NDC, and the atlas texel of a map with
+// `size` texels per face side. False when x is outside every view.
+bool map_locate(vec3 x, int size, out int face, out vec2 ndc, out ivec2 texel) {
+    face = u_map_cube == 1 ? cube_face(x - u_light_pos) : 0;
+    bool inside = project(u_map_vp[face], x, ndc);
+    ivec2 t = min(ivec2(floor((ndc * 0.5 + 0.5) * float(size))), ivec2(size - 1));
+    int slot = u_map_slot[face];
+    texel = ivec2(max(slot, 0) * size + t.x, t.y);
+    return inside && slot >= 0;
+}
+
+// Solid angle (sr, perspective) or area perpendicular to the light (m^2,
+// orthographic) of one texel of a square view of `size` texels at NDC `ndc`:
+// d_omega = (2t/size)^2 / (1 + t^2 |ndc|^2)^(3/2)  (a texel on the plane at unit
+// distance, foreshortened by cos^3), or (2h/size)^2.
+float texel_measure(int persp, float half_size, int size, vec2 ndc) {
+    float s = 2.0 * half_size / float(size);
+    if (persp == 0) return s * s;
+    float q = 1.0 + half_size * half_size * dot(ndc, ndc);
+    return s * s / (q * sqrt(q));
+}
+
+// Area (m^2) on the receiver covered by one caustic-map texel around hit x with
+// receiver normal n: the texel's solid angle times distance^2 (or its perpendicular
+// area) over |cos| between n and the light ray, the cosine clamped at 1e-3.
+float map_texel_area(vec3 x, vec3 n, vec2 ndc, int size) {
+    vec3 l = incident_dir(x);
+    float c = max(abs(dot(n, l)), 1e-3);
+    float m = texel_measure(u_map_persp, u_map_half, size, ndc);
+    if (u_map_persp == 0) return m / c;
+    vec3 dx = x - u_light_pos;
+    return m * dot(dx, dx) / c;
+}
+
+// Unpolarised Fresnel transmittance for cos_i = cos of the incidence angle (> 0),
+// from index eta_i into eta_t; 0 beyond the critical angle.
+float fresnel_transmittance(float cos_i, float eta_i, float eta_t) {
+    float eta = eta_i / eta_t;
+    float sin_t2 = eta * eta * max(1.0 - cos_i * cos_i, 0.0);
+    if (sin_t2 >= 1.0) return 0.0;
+    float cos_t = sqrt(1.0 - sin_t2);
+    float rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    float rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+    return 1.0 - 0.5 * (rs * rs + rp * rp);
+}
+
+// Normalisation of a discrete Gaussian splat centred at c (pixels; pixel centres at
+// k + 0.5) with standard deviations sigma (pixels) cut off at `cut` sigmas, over the
+// pixels of [lo, hi): sum of exp(-|p - c|^2_sigma / 2). Dividing each fragment's
+// weight by it makes the splat's weights sum to exactly one, whatever the sub-pixel
+// position, so flux is conserved texel for texel.
+float splat_norm(vec2 c, vec2 sigma, float cut, vec2 lo, vec2 hi) {
+    vec2 r = cut * sigma;
+    float total = 0.0;
+    for (float y = floor(c.y - r.y) + 0.5; y <= c.y + r.y; y += 1.0) {
+        if (y < lo.y || y >= hi.y) continue;
+        for (float x = floor(c.x - r.x) + 0.5; x <= c.x + r.x; x += 1.0) {
+            if (x < lo.x || x >= hi.x) continue;
+            vec2 q = (vec2(x, y) - c) / sigma;
+            float e = dot(q, q);
+            if (e <= cut * cut) total += exp(-0.5 * e);
+        }
+    }
+    return total;
+}

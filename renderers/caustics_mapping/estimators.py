@@ -1,0 +1,200 @@
+"""NumPy mirror of the shader's intersection estimators (``caustic_trace.glsl``).
+
+It works on the receiver positions atlas read back from the GPU and the (v, r) the
+shader used, and repeats the shader's arithmetic in float32 step by step
+(nearest-texel lookups, the same update rules, the same safeguard), so tests can
+hold the shader to the same numbers. See the shader header for the equations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["MapLookup", "MirrorResult", "estimate_distances"]
+
+_F = np.float32
+HIT, LOST, DIVERGED = 1, 2, 4
+
+
+@dataclass(frozen=True, eq=False)
+class MapLookup:
+    """T(x): the receiver positions atlas and the views that address it.
+
+    Attributes
+    ----------
+    atlas : ndarray (size, views * size, 4) float32
+        Row 0 at the bottom (texel y = 0): xyz world position (m), w receiver + 1.
+    view_projs : ndarray (views, 4, 4)
+        World -> clip per view (row-major, column vectors).
+    size : int
+        Texels per view side.
+    cube : bool
+        Six cube faces chosen by the major axis of x - light_position.
+    light_position : ndarray (3,)
+    slots : ndarray (6,) int, optional
+        Atlas slot of each view, -1 where the view is not stored (default: view i in
+        slot i).
+    """
+
+    atlas: np.ndarray
+    view_projs: np.ndarray
+    size: int
+    cube: bool
+    light_position: np.ndarray
+    slots: np.ndarray | None = None
+
+    def locate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(face, atlas texel (K, 2) as x, y, inside) for points x (K, 3)."""
+        face, texel, ok, _ = self.locate_with_margin(x)
+        return face, texel, ok
+
+    def locate_with_margin(self, x: np.ndarray):
+        """:meth:`locate` plus each point's distance to the nearest texel border
+        (texels): below ~1e-4 the shader's rounding may pick the neighbour."""
+        x = x.astype(_F)
+        if self.cube:
+            d = x - self.light_position.astype(_F)
+            a = np.abs(d)
+            face = np.where(
+                (a[:, 0] >= a[:, 1]) & (a[:, 0] >= a[:, 2]), np.where(d[:, 0] >= 0, 0, 1),
+                np.where(a[:, 1] >= a[:, 2], np.where(d[:, 1] >= 0, 2, 3),
+                         np.where(d[:, 2] >= 0, 4, 5)))
+        else:
+            face = np.zeros(len(x), np.int64)
+        m = self.view_projs.astype(_F)[face]                      # (K, 4, 4)
+        xh = np.concatenate([x, np.ones((len(x), 1), _F)], axis=1)
+        clip = np.einsum("kij,kj->ki", m, xh).astype(_F)
+        w = clip[:, 3]
+        ok = w > 0
+        safe_w = np.where(ok, w, _F(1))
+        ndc = (clip[:, :2] / safe_w[:, None]).astype(_F)
+        ok &= np.all(np.abs(ndc) <= 1, axis=1)
+        slots = np.arange(6) if self.slots is None else np.asarray(self.slots)
+        slot = slots[face]
+        ok &= slot >= 0
+        pixel = (ndc * _F(0.5) + _F(0.5)) * _F(self.size)
+        t = np.floor(pixel)
+        margin = np.min(np.minimum(pixel - t, t + 1 - pixel), axis=1)
+        t = np.clip(np.where(ok[:, None], t, 0), 0, self.size - 1).astype(np.int64)
+        texel = np.stack([np.maximum(slot, 0) * self.size + t[:, 0], t[:, 1]], axis=1)
+        return face, texel, ok, np.where(ok, margin, np.inf)
+
+    def receiver_at(self, x: np.ndarray, margin: np.ndarray | None = None):
+        """T(x) (K, 3) float32 and whether a receiver is there (K,); ``margin``, if
+        given, is lowered in place to each point's texel-border distance."""
+        _, texel, ok, m = self.locate_with_margin(x)
+        if margin is not None:
+            np.minimum(margin, m, out=margin)
+        q = self.atlas[texel[:, 1], texel[:, 0]]
+        return q[:, :3].astype(_F), ok & (q[:, 3] > 0.5)
+
+
+@dataclass(frozen=True, eq=False)
+class MirrorResult:
+    """history (K, iterations + 1) estimates (m), distance (K,), status (K,), and
+    margin (K,): the smallest distance (texels) of any lookup of the vertex to a
+    texel border; where it is ~0 the shader may legitimately read the neighbour."""
+
+    history: np.ndarray
+    distance: np.ndarray
+    status: np.ndarray
+    margin: np.ndarray
+
+
+def _norm(a: np.ndarray) -> np.ndarray:
+    return np.sqrt(np.sum(a * a, axis=1, dtype=_F)).astype(_F)
+
+
+def estimate_distances(
+    lookup: MapLookup, origins: np.ndarray, directions: np.ndarray, *, estimator: str,
+    iterations: int, eps: float, safeguarded: bool = False,
+) -> MirrorResult:
+    """Run one estimator on rays (v, r), like the shader does.
+
+    Parameters
+    ----------
+    origins, directions : ndarray (K, 3)
+        v (m) and unit r, as the trace pass wrote them.
+    estimator : {"modified", "newton", "secant"}
+    iterations : int
+        Updates after the start estimate d_1 = g(0).
+    eps : float
+        Newton's finite-difference step (m).
+
+    Returns
+    -------
+    MirrorResult
+        The final status is HIT, LOST (a lookup, or the final one, found no
+        receiver) or DIVERGED (non-finite update, unsafeguarded only).
+    """
+    v = origins.astype(_F)
+    r = directions.astype(_F)
+    k_count = len(v)
+    eps = _F(eps)
+
+    margin = np.full(k_count, np.inf)
+
+    def g_of(d):
+        t, ok = lookup.receiver_at(v + d[:, None] * r, margin)
+        return _norm(t - v), t, ok
+
+    hist = np.zeros((k_count, iterations + 1), _F)
+    g0, _, ok0 = g_of(np.zeros(k_count, _F))
+    status = np.where(ok0, HIT, LOST)
+    d = np.where(ok0, g0, _F(0)).astype(_F)
+    d_prev = np.zeros(k_count, _F)
+    h_prev = d.copy()
+    lo = np.zeros(k_count, _F)
+    hi = np.full(k_count, _F(-1))
+    hist[:, 0] = d
+    for k in range(1, iterations + 1):
+        active = status == HIT
+        g, t, ok = g_of(d)
+        status = np.where(active & ~ok, LOST, status)
+        active &= ok
+        h = (g - d).astype(_F)
+        lo = np.where(active & (h >= 0), np.maximum(lo, d), lo)
+        hi = np.where(active & (h < 0), np.where(hi < 0, d, np.minimum(hi, d)), hi)
+        finite = np.ones(k_count, bool)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            if estimator == "modified":
+                prop = g
+            elif estimator == "secant":
+                den = (h - h_prev).astype(_F)
+                finite = den != 0
+                prop = np.where(finite, d - h * (d - d_prev) / np.where(finite, den, 1), d)
+            elif estimator == "newton":
+                f = _norm(t - (v + d[:, None] * r))
+                de = (d + eps).astype(_F)
+                _g2, t2, ok2 = g_of(de)
+                lost2 = active & (h != 0) & ~ok2
+                status = np.where(lost2, LOST, status)
+                active &= ~lost2
+                fe = _norm(t2 - (v + de[:, None] * r))
+                den = (fe - f).astype(_F)
+                finite = (f == 0) | (den != 0)
+                step = np.where(den != 0, f * eps / np.where(den != 0, den, 1), 0)
+                prop = np.where(f == 0, d, d - step)
+            else:
+                raise ValueError(f"unknown estimator {estimator!r}")
+            prop = np.where(h == 0, d, prop).astype(_F)
+            finite = np.where(h == 0, True, finite) & (np.abs(prop) < 1e30)
+        if safeguarded:
+            osc = (k >= 2) & ((prop - d) * (d - d_prev) < 0) & (
+                np.abs(prop - d) >= _F(0.5) * np.abs(d - d_prev))
+            outside = (prop < lo) | ((hi >= 0) & (prop > hi))
+            fallback = ~finite | osc | outside
+            prop = np.where(fallback, np.where(hi >= 0, _F(0.5) * (lo + hi), g), prop)
+        else:
+            status = np.where(active & ~finite, DIVERGED, status)
+            active &= finite
+        d_prev = np.where(active, d, d_prev)
+        h_prev = np.where(active, h, h_prev)
+        d = np.where(active, prop, d).astype(_F)
+        hist[:, k] = d
+    _, ok = lookup.receiver_at(v + d[:, None] * r, margin)
+    status = np.where((status == HIT) & ~ok, LOST, status)
+    hist = np.where((status == LOST)[:, None] & ~ok0[:, None], _F(0), hist)
+    return MirrorResult(hist, d, status.astype(np.int32), margin)

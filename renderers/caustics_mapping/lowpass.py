@@ -1,0 +1,30 @@
+"""Optional pass: low-pass filter of the caustic map (``settings.lowpass``)."""
+
+from __future__ import annotations
+
+import moderngl
+
+from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.uniforms import set_uniform
+
+__all__ = ["lowpass_filter"]
+
+
+def lowpass_filter(
+    ctx: moderngl.Context, source: moderngl.Texture, *, size: int
+) -> moderngl.Texture:
+    """A 3x3 binomial blur of the caustic-map atlas ``source`` (RGBA32F), per face."""
+    target = ctx.texture(source.size, 4, dtype="f4")
+    target.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    fbo = ctx.framebuffer([target])
+    fbo.use()
+    program = load_program(ctx, "lowpass.glsl")
+    source.use(location=0)
+    set_uniform(program, "u_source", 0)
+    set_uniform(program, "u_size", size)
+    ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND | moderngl.CULL_FACE)
+    vao = ctx.vertex_array(program, [])
+    vao.render(moderngl.TRIANGLES, vertices=3)
+    vao.release()
+    release_framebuffer(ctx, fbo)
+    return target

@@ -1,0 +1,47 @@
+"""Triangle meshes uploaded once per render as vertex and index buffers."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+
+from harness.geometry import TriangleMesh
+
+__all__ = ["GpuMesh", "upload_mesh"]
+
+
+@dataclass(frozen=True, eq=False)
+class GpuMesh:
+    """A mesh on the GPU: interleaved ``3f position (m), 3f normal, 2f (u, v)``."""
+
+    vbo: moderngl.Buffer
+    ibo: moderngl.Buffer
+
+    def vertex_array(self, program: moderngl.Program) -> moderngl.VertexArray:
+        """A VAO binding the attributes ``program`` uses (others are skipped)."""
+        names = ("in_position", "in_normal", "in_uv")
+        sizes = (12, 12, 8)
+        fmt, attrs = [], []
+        for name, size in zip(names, sizes, strict=False):
+            if name in program:
+                fmt.append(f"{size // 4}f")
+                attrs.append(name)
+            else:
+                fmt.append(f"{size}x")
+        return program.ctx.vertex_array(
+            program, [(self.vbo, " ".join(fmt), *attrs)], index_buffer=self.ibo,
+            index_element_size=4,
+        )
+
+    def release(self) -> None:
+        self.vbo.release()
+        self.ibo.release()
+
+
+def upload_mesh(ctx: moderngl.Context, mesh: TriangleMesh) -> GpuMesh:
+    """Upload ``mesh``; a mesh without (u, v) gets zeros."""
+    uvs = mesh.uvs if mesh.uvs is not None else np.zeros((len(mesh.positions), 2), np.float32)
+    data = np.hstack([mesh.positions, mesh.normals, uvs]).astype(np.float32)
+    return GpuMesh(ctx.buffer(data.tobytes()), ctx.buffer(mesh.faces.astype(np.uint32).tobytes()))

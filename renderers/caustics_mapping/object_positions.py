@@ -1,0 +1,98 @@
+"""Pass 2: caustic-object positions and normals from the light (paper Section 3.2).
+
+The object atlas has ``grid`` x ``grid`` texels per object view, so each texel is one
+vertex of the paper's refractive vertex grid. Front surfaces always; back (exit)
+surfaces when the effects include ``refraction.double`` (Wyman 2005). The front
+pass runs inside an occlusion (samples) query: its count is the paper's V, the
+number of grid texels the object covers (Eq. 6).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+
+from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.lights import LightSetup
+from renderers.caustics_mapping.meshes import GpuMesh
+from renderers.caustics_mapping.uniforms import set_light_uniforms
+
+__all__ = ["ObjectSurfaces", "render_object_surfaces"]
+
+
+@dataclass(eq=False)
+class ObjectSurfaces:
+    """Object-atlas textures (RGBA32F, layout in ``object_positions.glsl``).
+
+    Attributes
+    ----------
+    positions, normals : moderngl.Texture
+    covered : int
+        Samples that passed the depth test (the paper's V), counted by an occlusion
+        query; only set for the front surfaces.
+    """
+
+    positions: moderngl.Texture
+    normals: moderngl.Texture
+    covered: int
+
+    def release(self) -> None:
+        self.positions.release()
+        self.normals.release()
+
+
+def render_object_surfaces(
+    ctx: moderngl.Context, light: LightSetup, objects: list[GpuMesh], *, grid: int,
+    back: bool = False, which: list[int] | None = None, count: bool = False,
+) -> ObjectSurfaces:
+    """Render the caustic objects (indices ``which``, default all) into the object views.
+
+    Parameters
+    ----------
+    back : bool
+        Render the exit surfaces (facing away from the light) instead of the front.
+    count : bool
+        Count the covered grid texels with an occlusion query (the paper's V): the
+        surfaces are drawn a second time with depth test ``==`` inside the query, so
+        fragments later hidden by nearer ones (overdraw) are not counted.
+    """
+    views = light.object_views
+    textures = [ctx.texture((len(views) * grid, grid), 4, dtype="f4") for _ in range(2)]
+    for tex in textures:
+        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    depth = ctx.depth_texture((len(views) * grid, grid))
+    fbo = ctx.framebuffer(textures, depth)
+    program = load_program(
+        ctx, "object_positions.glsl", defines={"BACK_FACES": 1} if back else None
+    )
+    set_light_uniforms(program, light)
+    fbo.use()
+    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+    ctx.enable(moderngl.DEPTH_TEST)
+    ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
+    indices = range(len(objects)) if which is None else which
+    vaos = {i: objects[i].vertex_array(program) for i in indices}
+
+    def draw() -> None:
+        for face, view in enumerate(views):
+            fbo.viewport = (face * grid, 0, grid, grid)
+            program["u_vp"].write(view.view_proj.T.astype("f4").tobytes())
+            for index, vao in vaos.items():
+                program["u_object"] = index
+                vao.render(moderngl.TRIANGLES)
+
+    draw()
+    covered = 0
+    if count:
+        query = ctx.query(samples=True)
+        ctx.depth_func = "=="
+        with query:
+            draw()
+        ctx.depth_func = "<"
+        covered = int(query.samples)
+    for vao in vaos.values():
+        vao.release()
+    release_framebuffer(ctx, fbo)
+    depth.release()
+    return ObjectSurfaces(*textures, covered=covered)

@@ -1,0 +1,72 @@
+"""Pass 1: receiver positions, normals and (u, v) from the light (paper Section 3.2).
+
+Output: three RGBA32F map atlases of ``settings.positions_map`` texels per face side
+(layout in ``common.glsl``), attachment 0 ``xyz`` world position (m), ``w`` receiver
+index + 1 (0 = none); attachment 1 the receiver normal; attachment 2 its (u, v).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+
+from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.lights import LightSetup
+from renderers.caustics_mapping.meshes import GpuMesh
+from renderers.caustics_mapping.uniforms import set_light_uniforms
+
+__all__ = ["ReceiverPositions", "render_receiver_positions"]
+
+
+@dataclass(eq=False)
+class ReceiverPositions:
+    """The receiver positions atlas and its companions (all RGBA32F)."""
+
+    positions: moderngl.Texture
+    normals: moderngl.Texture
+    uvs: moderngl.Texture
+    size: int
+    faces: tuple[int, ...]
+
+    def read_positions(self) -> np.ndarray:
+        """Attachment 0 as an array (size, views*size, 4), row 0 at the bottom."""
+        data = np.frombuffer(self.positions.read(), np.float32)
+        return data.reshape(self.size, -1, 4)
+
+    def release(self) -> None:
+        for tex in (self.positions, self.normals, self.uvs):
+            tex.release()
+
+
+def render_receiver_positions(
+    ctx: moderngl.Context, light: LightSetup, receivers: list[GpuMesh], *, size: int,
+    faces: tuple[int, ...],
+) -> ReceiverPositions:
+    """Render every receiver into the map views ``light.map_faces``, one atlas slot
+    each (``faces`` must equal them). Cube faces not stored report "no receiver"."""
+    width = len(light.map_faces) * size
+    textures = [ctx.texture((width, size), 4, dtype="f4") for _ in range(3)]
+    for tex in textures:
+        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    depth = ctx.depth_texture((width, size))
+    fbo = ctx.framebuffer(textures, depth)
+    program = load_program(ctx, "receiver_positions.glsl")
+    set_light_uniforms(program, light)
+    fbo.use()
+    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+    ctx.enable(moderngl.DEPTH_TEST)
+    ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
+    vaos = [mesh.vertex_array(program) for mesh in receivers]
+    for slot, face in enumerate(light.map_faces):
+        fbo.viewport = (slot * size, 0, size, size)
+        program["u_vp"].write(light.map_views[face].view_proj.T.astype("f4").tobytes())
+        for index, vao in enumerate(vaos):
+            program["u_receiver"] = index
+            vao.render(moderngl.TRIANGLES)
+    for vao in vaos:
+        vao.release()
+    release_framebuffer(ctx, fbo)
+    depth.release()
+    return ReceiverPositions(*textures, size=size, faces=faces)

@@ -1,0 +1,100 @@
+"""Pass 3c: receiver irradiance maps over each receiver's (u, v) domain.
+
+The same splats as the caustic map, drawn a second time into one RGBA32F target per
+receiver (``settings.receiver_map`` texels; row 0 at vmin, as
+:class:`harness.results.ReceiverMap` requires): rgb caustic irradiance in W per
+(u, v) area, a = splat weight.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+
+from harness.geometry import ReceiverGeometry
+from renderers.caustics_mapping.caustic_splat import record_vertex_array
+from renderers.caustics_mapping.caustic_trace import Trace
+from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.lights import LightSetup
+from renderers.caustics_mapping.receiver_positions import ReceiverPositions
+from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
+
+__all__ = ["UvMapping", "splat_receiver_map", "uv_mapping"]
+
+#: Largest splat radius in receiver-map pixels (bounds the per-splat loop).
+MAX_RADIUS_PX = 16.0
+
+
+@dataclass(frozen=True)
+class UvMapping:
+    """How a world position maps to a receiver's (u, v).
+
+    Attributes
+    ----------
+    affine : bool
+        (u, v) = rows @ (x, y, z, 1) reproduces the mesh's (u, v) at every vertex
+        (to 1e-5 of the extent): planes and heightfields.
+    rows : ndarray (2, 4)
+    uv_per_metre : float
+        sqrt((u, v) area / surface area): converts a splat's size in metres.
+    """
+
+    affine: bool
+    rows: np.ndarray
+    uv_per_metre: float
+
+
+def uv_mapping(receiver: ReceiverGeometry) -> UvMapping:
+    """Fit (u, v) as an affine function of position; measure (u, v) per metre."""
+    mesh = receiver.mesh
+    p = mesh.positions.astype(np.float64)
+    uv = (mesh.uvs if mesh.uvs is not None else p[:, :2]).astype(np.float64)
+    design = np.hstack([p, np.ones((len(p), 1))])
+    rows, *_ = np.linalg.lstsq(design, uv, rcond=None)
+    umin, umax, vmin, vmax = receiver.extent
+    scale = max(umax - umin, vmax - vmin, 1e-30)
+    affine = bool(np.abs(design @ rows - uv).max() <= 1e-5 * scale)
+    f = mesh.faces
+    e1, e2 = uv[f[:, 1]] - uv[f[:, 0]], uv[f[:, 2]] - uv[f[:, 0]]
+    uv_area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum()
+    ratio = float(np.sqrt(uv_area / max(mesh.area(), 1e-30)))
+    return UvMapping(affine, rows.T.copy(), ratio if ratio > 0 else 1.0)
+
+
+def splat_receiver_map(
+    ctx: moderngl.Context, light: LightSetup, traces: list[Trace], target: moderngl.Texture,
+    *, index: int, receiver: ReceiverGeometry, mapping: UvMapping,
+    positions: ReceiverPositions, caustic_size: int, sigma: float, cut: float,
+) -> None:
+    """Accumulate the splats that landed on receiver ``index`` into ``target``."""
+    fbo = ctx.framebuffer([target])
+    fbo.use()
+    fbo.clear(0.0, 0.0, 0.0, 0.0)
+    program = load_program(ctx, "receiver_splat.glsl")
+    set_light_uniforms(program, light)
+    positions.uvs.use(location=0)
+    set_uniform(program, "u_uv_texture", 0)
+    set_uniform(program, "u_receiver", index)
+    set_uniform(program, "u_caustic_size", caustic_size)
+    set_uniform(program, "u_positions_size", positions.size)
+    set_uniform(program, "u_uv_affine", int(mapping.affine))
+    set_uniform(program, "u_row_u", tuple(float(x) for x in mapping.rows[0]))
+    set_uniform(program, "u_row_v", tuple(float(x) for x in mapping.rows[1]))
+    set_uniform(program, "u_uv_per_metre", mapping.uv_per_metre)
+    set_uniform(program, "u_extent", tuple(float(x) for x in receiver.extent))
+    set_uniform(program, "u_map_size", target.size)
+    set_uniform(program, "u_sigma", float(sigma))
+    set_uniform(program, "u_cut", float(cut))
+    set_uniform(program, "u_max_radius", MAX_RADIUS_PX)
+    ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
+    ctx.enable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
+    ctx.blend_func = moderngl.ONE, moderngl.ONE
+    ctx.blend_equation = moderngl.FUNC_ADD
+    for trace in traces:
+        vao = record_vertex_array(program, trace)
+        vao.render(moderngl.POINTS, vertices=trace.count)
+        vao.release()
+    ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
+    release_framebuffer(ctx, fbo)

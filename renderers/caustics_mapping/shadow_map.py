@@ -1,0 +1,45 @@
+"""Pass 4: shadow map of the caustic objects from the light (paper Section 3.2).
+
+Runs only with the ``shadows`` effect. Output: an RGBA32F map atlas of
+``settings.shadow_map`` texels per face (layout in ``shadow_map.glsl``).
+"""
+
+from __future__ import annotations
+
+import moderngl
+
+from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.lights import LightSetup
+from renderers.caustics_mapping.meshes import GpuMesh
+from renderers.caustics_mapping.uniforms import set_light_uniforms
+
+__all__ = ["render_shadow_map"]
+
+
+def render_shadow_map(
+    ctx: moderngl.Context, light: LightSetup, objects: list[GpuMesh], *, size: int,
+    faces: tuple[int, ...],
+) -> moderngl.Texture:
+    """Nearest caustic-object distance per texel of the map views in ``faces``."""
+    views = len(light.map_faces)
+    target = ctx.texture((views * size, size), 4, dtype="f4")
+    target.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    depth = ctx.depth_texture((views * size, size))
+    fbo = ctx.framebuffer([target], depth)
+    program = load_program(ctx, "shadow_map.glsl")
+    set_light_uniforms(program, light)
+    fbo.use()
+    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+    ctx.enable(moderngl.DEPTH_TEST)
+    ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
+    vaos = [mesh.vertex_array(program) for mesh in objects]
+    for slot, face in enumerate(light.map_faces):
+        fbo.viewport = (slot * size, 0, size, size)
+        program["u_vp"].write(light.map_views[face].view_proj.T.astype("f4").tobytes())
+        for vao in vaos:
+            vao.render(moderngl.TRIANGLES)
+    for vao in vaos:
+        vao.release()
+    release_framebuffer(ctx, fbo)
+    depth.release()
+    return target
