@@ -2,8 +2,8 @@
 // (DESIGN.md, radiometric contract). Row 0 of the target is v = vmin, column 0
 // u = umin.
 //
-// Output (RGBA32F, u_map_size texels): rgb caustic irradiance E (W per unit (u, v)
-// area; W/m^2 for planes and heightfields), a = splat weight.
+// Output (RGBA32F, u_map_size texels): rgb caustic irradiance E (W/m^2 of receiver
+// surface, like the reference's photon tracer), a = splat weight.
 // (u, v) of a hit P: an affine map of P when the receiver's (u, v) are affine in
 // position (planes, heightfields), else the (u, v) the positions pass stored at P's
 // texel. The Gaussian has the footprint the splat has in the caustic map:
@@ -63,7 +63,16 @@ void main() {
     float norm = splat_norm(c, sigma, u_cut, vec2(0.0), size);
     if (!(norm > 0.0)) return;
     float texel_area = span.x * span.y / (size.x * size.y);        // (u, v) units^2
-    v_value = in_flux.rgb / (norm * texel_area);
+    // Irradiance is per unit *surface* area: divide by the surface area per unit
+    // (u, v) area, J = dA / (du dv). For affine (u, v) = (a.P + c, b.P + d) on a
+    // surface of normal n, du dv = |(a x b) . n| dA, so J = 1 / |(a x b) . n|
+    // (1 on a plane; 1 / |n_z| on a heightfield). Otherwise use the mesh's mean.
+    float jacobian = 1.0 / (u_uv_per_metre * u_uv_per_metre);
+    if (u_uv_affine == 1) {
+        float c = abs(dot(cross(u_row_u.xyz, u_row_v.xyz), normalize(in_normal.xyz)));
+        jacobian = 1.0 / max(c, 1e-6);
+    }
+    v_value = in_flux.rgb / (norm * texel_area * jacobian);
     v_center = c;
     v_sigma = sigma;
     gl_PointSize = 2.0 * ceil(u_cut * max(sigma.x, sigma.y)) + 2.0;

@@ -2,8 +2,9 @@
 
 The same splats as the caustic map, drawn a second time into one RGBA32F target per
 receiver (``settings.receiver_map`` texels; row 0 at vmin, as
-:class:`harness.results.ReceiverMap` requires): rgb caustic irradiance in W per
-(u, v) area, a = splat weight.
+:class:`harness.results.ReceiverMap` requires): rgb caustic irradiance in W per m²
+of receiver surface (flux per (u, v) area divided by the surface area per (u, v)
+area), a = splat weight.
 """
 
 from __future__ import annotations

@@ -21,7 +21,8 @@ def _finite(name, array):
 def test_scene_renders_finite(ctx, path, estimator):
     """Camera image, receiver maps, caustic map and every hits array are finite, the
     receiver maps are non-negative, the splatted flux is the receiver maps' flux
-    (conservation; rtol 1e-3 = float32 accumulation over ~1e4 splats), and lost
+    on planar receivers (conservation; rtol 1e-3 = float32 accumulation over ~1e4
+    splats) and bounds it on curved ones (maps are per m² of surface), and lost
     splats are counted in the metadata, never splatted."""
     frame = render_frame(small_scene(path, estimator=estimator), ctx=ctx)
     result = frame.result
@@ -33,8 +34,14 @@ def test_scene_renders_finite(ctx, path, estimator):
         _finite("receiver map", receiver.irradiance)
         assert receiver.irradiance.min() >= 0
     assert result.camera.min() >= 0
+    # Maps hold irradiance per m² of surface; integrated over (u, v) area they give
+    # Σ flux / J with J = dA / (du dv) ≥ 1, equal to 1 on planes only.
     total = sum(r.total_flux() for r in result.receivers)
-    np.testing.assert_allclose(total, result.metadata["splatted_flux"], rtol=1e-3, atol=1e-12)
+    splatted = np.asarray(result.metadata["splatted_flux"])
+    if all(r.kind == "plane" for r in small_scene(path, estimator=estimator).receivers):
+        np.testing.assert_allclose(total, splatted, rtol=1e-3, atol=1e-12)
+    else:
+        assert np.all(total <= splatted * (1 + 1e-3) + 1e-12)
     assert result.metadata["lost_splats"] == int(np.sum(frame.hits["status"] == STATUS["lost"]))
 
 
