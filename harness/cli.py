@@ -19,6 +19,7 @@ COMMAND_MODULES = (
     "harness.scene_commands",
     "renderers.mitsuba.cli",
     "renderers.caustics_mapping.cli",
+    "harness.compare_commands",
 )
 
 

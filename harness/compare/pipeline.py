@@ -1,0 +1,200 @@
+"""One scene, both renderers, every comparison: ``compare_scene`` builds the
+:class:`~harness.compare.records.SceneComparison` the outputs and the report use.
+
+Steps: the Mitsuba reference (from the cache when present) and an independent
+reference on disjoint seeds (the noise floor); the caustics-mapping render with the
+scene's settings (median frame time over repeats); metrics per view and region;
+the convergence table; the cost-versus-accuracy sweep and the equal-error speedup;
+the paper's claims; provenance.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from harness.compare.evaluate import exposure_for, score_view
+from harness.compare.records import SceneComparison
+from harness.compare.regions import caustic_region, object_mask
+from harness.metrics.tonemap import luminance
+from harness.scene import Scene, effects_of, with_settings
+from harness.studies.claims import check_five_iterations, check_one_iteration
+from harness.studies.convergence_study import convergence_study
+from harness.studies.cost_study import cost_study
+from harness.studies.runner import RealtimeRunner
+
+__all__ = ["STUDIES", "CompareOptions", "compare_scene"]
+
+STUDIES = ("metrics", "convergence", "cost")
+REFERENCE_KEYS = ("photons", "photon_budget", "spp", "seed", "seeds", "relative_noise",
+                  "target_noise", "stopped_by", "event_chains", "variant", "versions",
+                  "camera_integrator", "camera_max_depth", "camera_limits", "cache", "hash")
+
+
+@dataclass(frozen=True)
+class CompareOptions:
+    """How much to compute.
+
+    Attributes
+    ----------
+    studies : tuple of str
+        Any of ``metrics`` (always computed), ``convergence``, ``cost``.
+    max_iterations : int
+        Iterations 0..N of the convergence table.
+    quick : bool
+        Smaller sweeps and one timing repeat (a quick look, not for reporting).
+    cache, use_cache
+        Reference cache root (None: the default) and whether to use it.
+    progress : bool
+        Progress bars on stderr.
+    """
+
+    studies: tuple[str, ...] = STUDIES
+    max_iterations: int = 8
+    quick: bool = False
+    cache: str | None = None
+    use_cache: bool = True
+    progress: bool = True
+
+    @property
+    def repeats(self) -> int:
+        """Timed renders per configuration (the median is kept)."""
+        return 1 if self.quick else 3
+
+
+def _references(scene: Scene, options: CompareOptions):
+    from renderers.mitsuba.reference import render_reference  # noqa: PLC0415
+
+    s = scene.settings
+    reference = render_reference(scene, cache=options.cache, use_cache=options.use_cache,
+                                 progress=options.progress)
+    # Seeds s.seed + K .. s.seed + 2K - 1: disjoint from the reference's.
+    other = with_settings(scene, {"seed": s.seed + s.seeds})
+    independent = render_reference(other, cache=options.cache, use_cache=options.use_cache,
+                                   progress=options.progress)
+    return reference, independent
+
+
+def _camera_is_blind(reference: np.ndarray, test: np.ndarray) -> bool:
+    """The reference camera image is (nearly) black where the real-time one is not:
+    ptracer cannot connect receivers seen only through a specular surface."""
+    ref, rt = float(luminance(reference).mean()), float(luminance(test).mean())
+    return ref <= 1e-6 * max(rt, 1e-30)
+
+
+def _progress_bar(total: int, enabled: bool, label: str):
+    if not enabled:
+        return None, (lambda: None)
+    from tqdm import tqdm  # noqa: PLC0415
+
+    bar = tqdm(total=total, desc=label, unit="render", leave=False)
+    return bar, (lambda: bar.update(1))
+
+
+def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -> SceneComparison:
+    """Render ``scene`` both ways and compare (see the module docstring)."""
+    reference, independent = _references(scene, options)
+    with RealtimeRunner(scene, repeats=options.repeats) as runner:
+        frame, frame_time = runner.timed()
+        test = frame.result
+        gl_renderer = runner.ctx.info.get("GL_RENDERER", "unknown")
+        metrics, images, exposure, files = [], {}, {"white": {}, "flip_start": {},
+                                                     "flip_stop": {}, "diff_range": {}}, {}
+        views, camera_note = [], None
+
+        camera_ref = reference.camera
+        if _camera_is_blind(camera_ref, test.camera):
+            camera_note = ("camera not compared: the reference camera image is black "
+                           "(ptracer cannot see receivers through a specular surface)")
+        else:
+            obj = object_mask(scene.camera, runner.geometry)
+            views.append(("camera", test.camera, camera_ref, independent.camera,
+                          {"full": np.ones(obj.shape, bool), "object_masked": ~obj},
+                          {"mask_object": obj}, ~obj))
+        for i, (rt_map, ref_map, ind_map) in enumerate(zip(
+                test.receivers, reference.receivers, independent.receivers, strict=True)):
+            caustic = caustic_region(ref_map.irradiance)
+            views.append((f"receiver{i}", rt_map.irradiance, ref_map.irradiance,
+                          ind_map.irradiance, {"full": np.ones(caustic.shape, bool),
+                                               "caustic": caustic},
+                          {"mask_caustic": caustic}, None))
+        for view, rt_image, ref_image, ind_image, regions, masks, expo_mask in views:
+            expo = exposure_for(ref_image, mask=expo_mask)
+            values, maps = score_view(view, rt_image, ref_image, ind_image, regions=regions,
+                                      exposure=expo)
+            metrics += values
+            images.update(maps)
+            images[f"{view}/test"] = np.asarray(rt_image, np.float32)
+            images[f"{view}/reference"] = np.asarray(ref_image, np.float32)
+            for name, mask in masks.items():
+                images[f"{view}/{name}"] = mask
+            exposure["white"][view] = expo.white
+            exposure["flip_start"][view] = expo.flip_start
+            exposure["flip_stop"][view] = expo.flip_stop
+            exposure["diff_range"][view] = float(np.percentile(np.abs(maps[f"{view}/signed"]),
+                                                               99.5)) or 1.0
+            for kind in ("test", "reference", "signed", "ssim", "flip"):
+                files[f"{view}/{kind}"] = f"{view}_{kind}.exr"
+
+        convergence = cost = speedup = speedup_point = None
+        claims = {}
+        ref0 = reference.receivers[0].irradiance
+        caustic0 = caustic_region(ref0)
+        studies = set(options.studies)
+        max_iterations = min(options.max_iterations, 4) if options.quick else options.max_iterations
+        if "convergence" in studies:
+            total = 6 * (max_iterations + 1)
+            bar, tick = _progress_bar(total, options.progress, f"{scene.name}: convergence")
+            convergence = convergence_study(runner, ref0, caustic0, max_iterations=max_iterations,
+                                            exposure=exposure_for(ref0), progress=tick)
+            if bar is not None:
+                bar.close()
+            claims = _claims(convergence)
+        if "cost" in studies:
+            bar, tick = _progress_bar(30, options.progress, f"{scene.name}: cost sweep")
+            cost, speedup, speedup_point = cost_study(
+                runner, ref0, caustic0, reference_photons=int(reference.metadata["photons"]),
+                quick=options.quick, progress=tick)
+            if bar is not None:
+                bar.close()
+
+    provenance = {
+        "scene_file": scene.source,
+        "caustics_mapping": {
+            "passes": test.metadata.get("passes"),
+            "timings_ms": {k: v * 1e3 for k, v in test.timings.items()},
+            "frame_time_ms": frame_time * 1e3,
+            "timer": test.timer,
+            "lost_splats": test.metadata.get("lost_splats"),
+            "status_counts": test.metadata.get("status_counts"),
+            "gl_renderer": gl_renderer,
+        },
+        "reference": {**{k: reference.metadata.get(k) for k in REFERENCE_KEYS},
+                      "timings_s": reference.timings, "timer": reference.timer},
+        "independent_reference": {k: independent.metadata.get(k)
+                                  for k in ("seed", "seeds", "relative_noise", "cache")},
+        "machine": {"platform": platform.platform(), "processor": platform.processor(),
+                    "cpus": os.cpu_count(), "python": platform.python_version()},
+    }
+    if camera_note:
+        provenance["camera_note"] = camera_note
+    return SceneComparison(
+        name=scene.name, description=scene.info.description, source=scene.source,
+        effects=effects_of(scene), settings=asdict(scene.settings), metrics=tuple(metrics),
+        images=images, exposure=exposure, convergence=convergence, cost=cost,
+        speedup=speedup, claims=claims, provenance=provenance, files=files,
+        speedup_point=speedup_point)
+
+
+def _claims(convergence) -> dict[str, str]:
+    rows = [dict(zip(convergence.columns, r, strict=True)) for r in convergence.rows
+            if r[0] == "modified" and not r[1]]
+    five = check_five_iterations({r["iteration"]: r["p95_error_texels"] for r in rows})[1]
+    one = check_one_iteration({r["iteration"]: r["relmse"] for r in rows})[1]
+    return {"error negligible after five iterations (modified estimator)": five,
+            "one iteration is enough for rendering (modified estimator)": one}
+
+

@@ -1,0 +1,95 @@
+"""Convergence table: each estimator × iteration count, measured on the shader.
+
+For every estimator (plain and safeguarded) and every iteration count 0..N, the
+scene is rendered once per count; each render's per-vertex hit distances are held
+against the exact ray-cast distance along the same (v, r) (``harness.raycast``),
+and its receiver map against the reference. Iteration 0 is the start estimate
+d = g(0): the receiver seen along the light ray through v.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from harness.compare.evaluate import score_value
+from harness.compare.records import Table
+from harness.raycast import ReceiverTracer
+from harness.studies.convergence import iteration_stats, lookups_per_vertex
+from harness.studies.runner import RealtimeRunner
+
+__all__ = ["COLUMNS", "CONFIGS", "convergence_study", "texel_footprint"]
+
+CONFIGS = tuple((e, s) for e in ("modified", "newton", "secant") for s in (False, True))
+COLUMNS = ("estimator", "safeguarded", "iteration", "mean_error_m", "p95_error_m",
+           "max_error_m", "mean_error_texels", "p95_error_texels", "max_error_texels",
+           "converged", "diverged", "lost", "lookups_per_vertex", "relmse", "time_ms")
+
+
+def texel_footprint(runner: RealtimeRunner, hits: dict, points: np.ndarray) -> np.ndarray:
+    """Width (m) of one caustic-map texel at each point, seen from the light that
+    traced it: 2 t d / M for a perspective view of half-angle tangent t at distance
+    d, 2 h / M for an orthographic view of half-width h."""
+    from renderers.caustics_mapping.lights import light_setups  # noqa: PLC0415
+
+    setups = light_setups(runner.scene, runner.geometry)
+    size = runner.scene.settings.caustic_map
+    light = hits["light"].astype(int)
+    out = np.empty(len(points))
+    for index, setup in enumerate(setups):
+        mine = light == index
+        view = setup.map_views[0]
+        if view.perspective:
+            distance = np.linalg.norm(points[mine] - setup.position, axis=1)
+            out[mine] = 2 * view.half_size * distance / size
+        else:
+            out[mine] = 2 * view.half_size / size
+    return out
+
+
+def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarray, *,
+                      max_iterations: int = 8, configs=CONFIGS, exposure=None,
+                      progress=None) -> Table:
+    """The convergence table (columns :data:`COLUMNS`).
+
+    Parameters
+    ----------
+    reference
+        Reference caustic irradiance of receiver 0, (H, W, 3) W/m².
+    caustic
+        Boolean (H, W) caustic region of receiver 0, where relMSE is scored.
+    progress
+        Optional callable advanced once per render.
+    """
+    from renderers.caustics_mapping.caustic_trace import STATUS  # noqa: PLC0415
+
+    tracer = ReceiverTracer(runner.geometry)
+    rows = []
+    for estimator, safeguarded in configs:
+        for k in range(max_iterations + 1):
+            frame, seconds = runner.timed(estimator=estimator, safeguarded=safeguarded,
+                                          iterations=k)
+            hits = frame.hits
+            status = hits["status"].astype(int)
+            # Vertices the estimator worked on: a ray left the object (no TIR, no
+            # missing exit surface) and was followed to a hit, a loss or a divergence.
+            traced = np.isin(status, [STATUS["hit"], STATUS["lost"], STATUS["diverged"]])
+            exact = tracer(hits["origin"][traced], hits["direction"][traced])
+            estimate = hits["distance"][traced].astype(np.float64)
+            estimate[status[traced] == STATUS["diverged"]] = np.nan
+            start = hits["history"][traced][:, 0].astype(np.float64)
+            lost = status[traced] == STATUS["lost"]
+            points = np.where(np.isfinite(exact.position), exact.position,
+                              hits["origin"][traced])
+            footprint = texel_footprint(runner, {"light": hits["light"][traced]}, points)
+            stats = iteration_stats(np.stack([start, estimate]), np.stack([lost, lost]),
+                                    exact.distance, footprint)[1]
+            relmse = score_value("relmse", frame.result.receivers[0].irradiance, reference,
+                                 mask=caustic, exposure=exposure)
+            rows.append((estimator, safeguarded, k, stats.mean_error_m, stats.p95_error_m,
+                         stats.max_error_m, stats.mean_error_texels, stats.p95_error_texels,
+                         stats.max_error_texels, stats.converged, stats.diverged, stats.lost,
+                         lookups_per_vertex(estimator, k, safeguarded=safeguarded), relmse,
+                         seconds * 1e3))
+            if progress is not None:
+                progress()
+    return Table(COLUMNS, tuple(rows))

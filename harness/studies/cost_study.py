@@ -1,0 +1,101 @@
+"""What accuracy costs in time: (frame time, error) of many configurations of the
+real-time method, the reference's own error-versus-time curve on the same axes, the
+Pareto front and the equal-error speedup (``harness.studies.pareto``).
+
+Error is the relMSE of receiver 0's caustic irradiance against the reference over
+the caustic region. Configurations vary one thing at a time around the scene's
+settings (grid, caustic-map size, splat width), plus every estimator at several
+iteration counts. The reference curve renders the photon tracer with growing photon
+budgets on a seed disjoint from the reference's and times it end to end
+(``time.perf_counter``, kernel compilation included: that is what it costs).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from harness.compare.evaluate import score_value
+from harness.compare.records import Table
+from harness.studies.pareto import EqualErrorSpeedup, equal_error_speedup, pareto_front
+from harness.studies.runner import RealtimeRunner
+
+__all__ = ["COLUMNS", "cost_study", "sweep_configs"]
+
+COLUMNS = ("series", "label", "estimator", "iterations", "grid", "caustic_map",
+           "splat_sigma", "time_s", "relmse", "pareto")
+
+
+def sweep_configs(*, quick: bool) -> list[dict]:
+    """Settings overrides of the sweep (a smaller set when ``quick``)."""
+    iterations = (0, 1, 3) if quick else (0, 1, 2, 3, 5, 8)
+    grids = (32, 64, 128) if quick else (32, 64, 128, 256)
+    maps = (256, 512) if quick else (256, 512, 1024)
+    sigmas = (0.5, 1.0, 2.0)
+    configs = [{"estimator": e, "iterations": k}
+               for e in ("modified", "newton", "secant") for k in iterations]
+    configs += [{"grid": g} for g in grids]
+    configs += [{"caustic_map": m, "positions_map": m} for m in maps]
+    configs += [{"splat_sigma": s} for s in sigmas]
+    return configs
+
+
+def _label(config: dict) -> str:
+    return ", ".join(f"{k}={v}" for k, v in config.items() if k != "positions_map")
+
+
+def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarray, *,
+               reference_photons: int, quick: bool = False, progress=None,
+               ) -> tuple[Table, EqualErrorSpeedup | None, tuple[float, float] | None]:
+    """(table, equal-error speedup of the scene's own settings, that (time, error)).
+
+    Parameters
+    ----------
+    reference, caustic
+        Reference caustic irradiance of receiver 0 and its caustic region.
+    reference_photons
+        Photons per seed of the reference; the curve uses 1/256 .. 1/4 of it
+        (1/64 .. 1/4 when ``quick``).
+    """
+    from renderers.mitsuba.reference import estimate_receivers  # noqa: PLC0415
+
+    scene = runner.scene
+    s = scene.settings
+    rows = []
+    base_frame, base_time = runner.timed()
+    base_error = score_value("relmse", base_frame.result.receivers[0].irradiance, reference,
+                             mask=caustic, exposure=None)
+    rows.append(("caustics_mapping", "scene settings", s.estimator, s.iterations, s.grid,
+                 s.caustic_map, s.splat_sigma, base_time, base_error))
+    for config in sweep_configs(quick=quick):
+        frame, seconds = runner.timed(**config)
+        error = score_value("relmse", frame.result.receivers[0].irradiance, reference,
+                            mask=caustic, exposure=None)
+        merged = {"estimator": s.estimator, "iterations": s.iterations, "grid": s.grid,
+                  "caustic_map": s.caustic_map, "splat_sigma": s.splat_sigma, **config}
+        rows.append(("caustics_mapping", _label(config), merged["estimator"],
+                     merged["iterations"], merged["grid"], merged["caustic_map"],
+                     merged["splat_sigma"], seconds, error))
+        if progress is not None:
+            progress()
+    fractions = (64, 16, 4) if quick else (256, 64, 16, 4)
+    ref_times, ref_errors = [], []
+    for fraction in fractions:
+        photons = max(1, reference_photons // fraction)
+        estimate = estimate_receivers(scene, photons=photons, seeds=1,
+                                      seed=s.seed + 10_000 + fraction, target_noise=1e-12)
+        seconds = estimate.history[-1][2]
+        error = score_value("relmse", estimate.caustic[0].irradiance, reference,
+                            mask=caustic, exposure=None)
+        rows.append(("reference", f"photons={photons}", "", 0, 0, 0, 0.0, seconds, error))
+        ref_times.append(seconds)
+        ref_errors.append(error)
+        if progress is not None:
+            progress()
+    # The caustics-mapping rows come first, so front indices are row indices.
+    realtime = [r for r in rows if r[0] == "caustics_mapping"]
+    front = set(pareto_front([r[7] for r in realtime], [r[8] for r in realtime]).tolist())
+    table = Table(COLUMNS, tuple((*row, i in front) for i, row in enumerate(rows)))
+    speedup = None
+    if base_time > 0 and base_error > 0 and all(e > 0 for e in ref_errors):
+        speedup = equal_error_speedup(base_time, base_error, ref_times, ref_errors)
+    return table, speedup, (base_time, base_error)
