@@ -75,8 +75,10 @@ class MeshTracer:
         Directions are normalised here, so distances are in metres.
         """
         mi = self._mi
-        o = np.asarray(origins, np.float64)
-        d = np.asarray(directions, np.float64)
+        o = np.asarray(origins, np.float64).reshape(-1, 3)
+        d = np.asarray(directions, np.float64).reshape(-1, 3)
+        if len(o) == 0:  # Dr.Jit aborts on zero-sized launches
+            return RayHits(np.zeros(0), np.zeros(0, int), np.zeros((0, 3)))
         d = d / np.linalg.norm(d, axis=1, keepdims=True)
         ray = mi.Ray3f(mi.Point3f(o.T.astype(np.float32)), mi.Vector3f(d.T.astype(np.float32)))
         best = np.full(len(o), np.inf)

@@ -124,7 +124,8 @@ class SceneComparison:
     convergence : Table or None
         Columns: estimator, safeguarded, iteration, mean_error_m, p95_error_m,
         max_error_m, mean_error_texels, p95_error_texels, max_error_texels,
-        converged, diverged, lost, lookups_per_vertex, relmse, time_ms.
+        converged, diverged, oscillating, stalled, lost, lookups_per_vertex, relmse,
+        time_ms.
     cost : Table or None
         Columns: series (``caustics_mapping`` or ``reference``), label, estimator,
         iterations, grid, caustic_map, splat_sigma, time_s, relmse, pareto.

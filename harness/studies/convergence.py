@@ -1,19 +1,26 @@
 """Convergence of the intersection estimators, measured against exact ray casts.
 
-Inputs are per grid vertex: the estimated hit distance after each iteration
-(``estimates[k]`` after k iterations, k = 0 the starting estimate d = g(0)), whether
-the lookup lost the receiver, and the exact distance along the same ray (v, r) from
+Input per grid vertex: the history of estimated hit distances d_0 .. d_k of one
+render with k iterations (d_0 is the start estimate g(0)), whether the lookup lost
+the receiver, and the exact distance d* along the same ray (v, r) from
 ``harness.raycast``. Errors are |d_k − d*| in metres and in caustic-map texels (the
 metres divided by the footprint of one texel at the exact hit point).
 
-Outcome per vertex and iteration (vertices whose exact ray hits a receiver):
+Outcome of each vertex whose exact ray hits a receiver, with tolerance τ (default one
+texel; steps Δ_j = d_j − d_{j−1} are measured in texels too):
 
-* ``lost``      the estimator's lookup found no receiver (the splat is dropped);
-* ``converged`` error ≤ ``tolerance_texels`` (default 1 texel: the splat lands in
-  the right texel);
-* ``diverged``  non-finite, or error above ``tolerance_texels`` and larger than the
-  starting estimate's (iterating moved the estimate away from the answer);
-* the rest are still converging.
+* ``lost``        the estimator's lookup found no receiver (the splat is dropped);
+* ``converged``   |d_k − d*| ≤ τ: the splat lands in the right texel;
+* ``diverged``    d_k is not finite, or negative, or more than 10× the exact
+  distance: the iteration ran away;
+* ``oscillating`` the last two steps change sign and the last is at least 3/4 as
+  long as the one before, and longer than τ: jumping between two estimates (the
+  plain Newton-Raphson failure the paper describes). Bisection, which halves its
+  step, is not oscillation;
+* ``stalled``     |Δ_k| ≤ τ but |d_k − d*| > τ: stationary at a wrong fixed point of
+  g, typically a receiver point the light sees that is not the ray's first hit
+  (depth discontinuities, corrugated receivers);
+* the rest are still converging (``converging``).
 """
 
 from __future__ import annotations
@@ -22,10 +29,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LOOKUPS", "IterationStats", "iteration_stats", "lookups_per_vertex"]
+__all__ = ["LOOKUPS", "OUTCOMES", "IterationStats", "iteration_stats", "lookups_per_vertex"]
 
 #: Positions-texture lookups: for the starting estimate g(0), and per iteration.
 LOOKUPS = {"modified": (1, 1), "newton": (1, 2), "secant": (1, 1)}
+OUTCOMES = ("converged", "diverged", "oscillating", "stalled", "converging", "lost")
 
 
 def lookups_per_vertex(estimator: str, iterations: int, *, safeguarded: bool = False) -> int:
@@ -40,7 +48,8 @@ def lookups_per_vertex(estimator: str, iterations: int, *, safeguarded: bool = F
 
 @dataclass(frozen=True)
 class IterationStats:
-    """Error statistics of one estimator after ``iteration`` iterations."""
+    """Errors after ``iteration`` iterations and the fraction of each outcome
+    (fractions of the vertices whose exact ray hits a receiver)."""
 
     iteration: int
     mean_error_m: float
@@ -51,6 +60,9 @@ class IterationStats:
     max_error_texels: float
     converged: float
     diverged: float
+    oscillating: float
+    stalled: float
+    converging: float
     lost: float
 
 
@@ -60,44 +72,60 @@ def _stats(values: np.ndarray) -> tuple[float, float, float]:
     return float(values.mean()), float(np.percentile(values, 95)), float(values.max())
 
 
-def iteration_stats(estimates, lost, exact, texel_size, *,
-                    tolerance_texels: float = 1.0) -> list[IterationStats]:
-    """Statistics per iteration.
+def classify(history, lost, exact, texel_size, *, tolerance_texels: float = 1.0) -> np.ndarray:
+    """Outcome name of each vertex (object array); ``""`` where the exact ray misses."""
+    history = np.asarray(history, np.float64)
+    lost = np.asarray(lost, bool)
+    exact = np.asarray(exact, np.float64)
+    texel = np.broadcast_to(np.asarray(texel_size, np.float64), exact.shape)
+    final = history[:, -1]
+    with np.errstate(invalid="ignore", over="ignore"):
+        error = np.abs(final - exact) / texel
+        steps = np.diff(history, axis=1) / texel[:, None]
+    outcome = np.full(len(exact), "converging", dtype=object)
+    last = steps[:, -1] if steps.shape[1] else np.zeros(len(exact))
+    if steps.shape[1] >= 2:
+        before = steps[:, -2]
+        oscillating = ((np.sign(last) * np.sign(before) < 0)
+                       & (np.abs(last) >= 0.75 * np.abs(before))
+                       & (np.abs(last) > tolerance_texels))
+        outcome[oscillating] = "oscillating"
+    outcome[(np.abs(last) <= tolerance_texels) & (error > tolerance_texels)] = "stalled"
+    outcome[error <= tolerance_texels] = "converged"
+    runaway = ~np.isfinite(final) | (final < 0) | (final > 10 * exact)
+    outcome[runaway] = "diverged"
+    outcome[lost] = "lost"
+    outcome[~np.isfinite(exact)] = ""
+    return outcome
+
+
+def iteration_stats(history, lost, exact, texel_size, *, iteration: int | None = None,
+                    tolerance_texels: float = 1.0) -> IterationStats:
+    """Statistics of one render's final estimates.
 
     Parameters
     ----------
-    estimates : array (K+1, N)
-        Estimated distance (m) after k = 0..K iterations.
-    lost : array (K+1, N), bool
-        The lookup at iteration k found no receiver.
+    history : array (N, k+1)
+        Estimated distance (m) after 0..k iterations, per vertex.
+    lost : array (N,), bool
+        The estimator's lookup found no receiver.
     exact : array (N,)
         Exact distance (m), ``inf`` where the ray misses every receiver (those
         vertices are excluded: there is nothing to converge to).
     texel_size : float or array (N,)
         Footprint of one caustic-map texel at the exact hit, metres.
     """
-    estimates = np.asarray(estimates, np.float64)
-    lost = np.asarray(lost, bool)
+    history = np.asarray(history, np.float64)
     exact = np.asarray(exact, np.float64)
-    if estimates.ndim != 2 or estimates.shape != lost.shape or estimates.shape[1] != exact.size:
-        raise ValueError("estimates and lost must be (K+1, N) with N = len(exact)")
+    if history.ndim != 2 or history.shape[0] != exact.size or np.shape(lost) != exact.shape:
+        raise ValueError("history must be (N, k+1) and lost (N,) with N = len(exact)")
     texel = np.broadcast_to(np.asarray(texel_size, np.float64), exact.shape)
-    valid = np.isfinite(exact)
+    outcome = classify(history, lost, exact, texel, tolerance_texels=tolerance_texels)
+    valid = outcome != ""
     count = max(int(valid.sum()), 1)
-    start_error = np.abs(estimates[0] - exact)
-    rows = []
-    for k in range(estimates.shape[0]):
-        error = np.abs(estimates[k] - exact)
-        finite = np.isfinite(error)
-        ok = valid & ~lost[k] & finite
-        texels = error / texel
-        converged = ok & (texels <= tolerance_texels)
-        diverged = valid & ~lost[k] & (~finite | ((texels > tolerance_texels)
-                                                  & (error > start_error)))
-        rows.append(IterationStats(
-            k, *_stats(error[ok]), *_stats(texels[ok]),
-            converged=float(converged.sum() / count),
-            diverged=float(diverged.sum() / count),
-            lost=float((valid & lost[k]).sum() / count),
-        ))
-    return rows
+    with np.errstate(invalid="ignore"):
+        error = np.abs(history[:, -1] - exact)
+    ok = valid & (outcome != "lost") & np.isfinite(error)
+    fractions = {name: float((outcome == name).sum() / count) for name in OUTCOMES}
+    k = history.shape[1] - 1 if iteration is None else iteration
+    return IterationStats(k, *_stats(error[ok]), *_stats((error / texel)[ok]), **fractions)

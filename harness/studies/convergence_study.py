@@ -22,7 +22,8 @@ __all__ = ["COLUMNS", "CONFIGS", "convergence_study", "texel_footprint"]
 CONFIGS = tuple((e, s) for e in ("modified", "newton", "secant") for s in (False, True))
 COLUMNS = ("estimator", "safeguarded", "iteration", "mean_error_m", "p95_error_m",
            "max_error_m", "mean_error_texels", "p95_error_texels", "max_error_texels",
-           "converged", "diverged", "lost", "lookups_per_vertex", "relmse", "time_ms")
+           "converged", "diverged", "oscillating", "stalled", "lost", "lookups_per_vertex",
+           "relmse", "time_ms")
 
 
 def texel_footprint(runner: RealtimeRunner, hits: dict, points: np.ndarray) -> np.ndarray:
@@ -74,20 +75,19 @@ def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np
             # missing exit surface) and was followed to a hit, a loss or a divergence.
             traced = np.isin(status, [STATUS["hit"], STATUS["lost"], STATUS["diverged"]])
             exact = tracer(hits["origin"][traced], hits["direction"][traced])
-            estimate = hits["distance"][traced].astype(np.float64)
-            estimate[status[traced] == STATUS["diverged"]] = np.nan
-            start = hits["history"][traced][:, 0].astype(np.float64)
+            history = hits["history"][traced].astype(np.float64)
+            history[status[traced] == STATUS["diverged"], -1] = np.nan
             lost = status[traced] == STATUS["lost"]
             points = np.where(np.isfinite(exact.position), exact.position,
                               hits["origin"][traced])
             footprint = texel_footprint(runner, {"light": hits["light"][traced]}, points)
-            stats = iteration_stats(np.stack([start, estimate]), np.stack([lost, lost]),
-                                    exact.distance, footprint)[1]
+            stats = iteration_stats(history, lost, exact.distance, footprint, iteration=k)
             relmse = score_value("relmse", frame.result.receivers[0].irradiance, reference,
                                  mask=caustic, exposure=exposure)
             rows.append((estimator, safeguarded, k, stats.mean_error_m, stats.p95_error_m,
                          stats.max_error_m, stats.mean_error_texels, stats.p95_error_texels,
-                         stats.max_error_texels, stats.converged, stats.diverged, stats.lost,
+                         stats.max_error_texels, stats.converged, stats.diverged,
+                         stats.oscillating, stats.stalled, stats.lost,
                          lookups_per_vertex(estimator, k, safeguarded=safeguarded), relmse,
                          seconds * 1e3))
             if progress is not None:

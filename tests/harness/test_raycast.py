@@ -35,3 +35,10 @@ def test_nearest_of_several_receivers():
                      [[0, 0, -1], [0, 0, -1]])
     assert hits.receiver.tolist() == [1, 0]
     assert hits.distance[0] == pytest.approx(3.0 - rock_top[2], abs=0.05)
+
+
+def test_no_rays():
+    """An empty batch returns empty arrays (Dr.Jit itself aborts on empty launches)."""
+    geometry = build_geometry(load_scene(SCENES / "glass_sphere.toml"))
+    hits = cast_rays(geometry, np.zeros((0, 3)), np.zeros((0, 3)))
+    assert hits.distance.shape == (0,) and hits.position.shape == (0, 3)

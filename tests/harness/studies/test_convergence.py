@@ -1,45 +1,50 @@
-"""Convergence statistics on constructed estimate sequences with known outcomes."""
+"""Convergence statistics on constructed histories with known outcomes."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from harness.studies.convergence import iteration_stats, lookups_per_vertex
+from harness.studies.convergence import classify, iteration_stats, lookups_per_vertex
 
 
-def test_statistics_and_outcomes():
-    """Four vertices, exact distance 2 m, texel 0.01 m:
-    v0 converges (error 0.5, 0.05, 0.001), v1 oscillates away (0.5, 0.6, 0.8),
-    v2 is lost at iteration 2, v3's ray misses every receiver (excluded)."""
-    exact = np.array([2.0, 2.0, 2.0, np.inf])
-    estimates = np.array([
-        [1.5, 1.5, 1.5, 1.0],
-        [1.95, 2.6, 1.9, 1.0],
-        [2.001, 1.2, 0.0, 1.0],
+def test_each_outcome():
+    """Exact distance 2 m, texel 0.01 m (τ = 1 texel = 0.01 m):
+    v0 converges (1.5 → 1.95 → 2.001); v1 oscillates (2.5 → 1.5 → 2.5); v2 stalls
+    on a wrong root (2.3 → 2.3); v3 runs away (3 → 30 > 10·2); v4 is lost; v5's ray
+    misses every receiver (excluded); v6 still converging (1.5 → 1.7 → 1.8)."""
+    exact = np.array([2.0, 2.0, 2.0, 2.0, 2.0, np.inf, 2.0])
+    history = np.array([
+        [1.5, 1.95, 2.001],
+        [1.5, 2.5, 1.5],
+        [2.0, 2.3, 2.3],
+        [1.0, 3.0, 30.0],
+        [0.0, 0.0, 0.0],
+        [1.0, 1.0, 1.0],
+        [1.5, 1.7, 1.8],
     ])
-    lost = np.zeros_like(estimates, bool)
-    lost[2, 2] = True
-    rows = iteration_stats(estimates, lost, exact, 0.01)
-    assert [r.iteration for r in rows] == [0, 1, 2]
-    last = rows[2]
-    assert last.converged == pytest.approx(1 / 3)
-    assert last.diverged == pytest.approx(1 / 3)
-    assert last.lost == pytest.approx(1 / 3)
-    assert last.max_error_m == pytest.approx(0.8)
-    assert last.mean_error_m == pytest.approx((0.001 + 0.8) / 2)
-    assert last.max_error_texels == pytest.approx(80.0)
-    assert rows[0].converged == 0.0 and rows[0].diverged == 0.0
+    lost = np.array([False, False, False, False, True, False, False])
+    outcome = classify(history, lost, exact, 0.01)
+    assert outcome.tolist() == ["converged", "oscillating", "stalled", "diverged", "lost", "",
+                                "converging"]
+    stats = iteration_stats(history, lost, exact, 0.01)
+    assert stats.iteration == 2
+    for name in ("converged", "oscillating", "stalled", "diverged", "lost", "converging"):
+        assert getattr(stats, name) == pytest.approx(1 / 6)
+    # Errors over the non-lost vertices with an exact hit: 0.001, 0.5, 0.3, 28, 0.2.
+    assert stats.max_error_m == pytest.approx(28.0)
+    assert stats.mean_error_m == pytest.approx((0.001 + 0.5 + 0.3 + 28 + 0.2) / 5)
+    assert stats.max_error_texels == pytest.approx(2800.0)
 
 
-def test_non_finite_estimate_counts_as_diverged():
-    rows = iteration_stats([[1.0], [np.nan]], [[False], [False]], [2.0], 0.01)
-    assert rows[1].diverged == 1.0 and np.isnan(rows[1].mean_error_m)
+def test_non_finite_estimate_is_diverged():
+    stats = iteration_stats([[1.0, np.nan]], [False], [2.0], 0.01)
+    assert stats.diverged == 1.0 and np.isnan(stats.mean_error_m)
 
 
 def test_shape_mismatch_is_an_error():
-    with pytest.raises(ValueError, match="K\\+1, N"):
-        iteration_stats([[1.0, 2.0]], [[False]], [2.0, 2.0], 0.01)
+    with pytest.raises(ValueError, match="N, k\\+1"):
+        iteration_stats([[1.0, 2.0]], [False, False], [2.0, 2.0], 0.01)
 
 
 def test_lookup_counts():
