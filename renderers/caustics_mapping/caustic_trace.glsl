@@ -142,7 +142,10 @@ int estimate(vec3 v, vec3 r, int hbase, out float d_out) {
         if (u_safeguarded == 1) {
             bool osc = k >= 2 && (prop - d) * (d - d_prev) < 0.0
                 && abs(prop - d) >= 0.5 * abs(d - d_prev);
-            bool outside = prop < lo || (hi >= 0.0 && prop > hi);
+            // Outside the bracket [lo, hi]; without an upper end yet, a step past
+            // twice the modified update's distance max(g, lo) is a runaway (a
+            // trust region), so it is replaced as well.
+            bool outside = prop < lo || (hi >= 0.0 ? prop > hi : prop > 2.0 * max(g, lo));
             if (!finite || osc || outside) prop = hi >= 0.0 ? 0.5 * (lo + hi) : g;
         } else if (!finite) {
             status = STATUS_DIVERGED;

@@ -184,7 +184,10 @@ def estimate_distances(
         if safeguarded:
             osc = (k >= 2) & ((prop - d) * (d - d_prev) < 0) & (
                 np.abs(prop - d) >= _F(0.5) * np.abs(d - d_prev))
-            outside = (prop < lo) | ((hi >= 0) & (prop > hi))
+            # Without an upper bracket end, a step past twice the modified update's
+            # distance is a runaway (the caustic_trace.glsl trust region).
+            outside = (prop < lo) | np.where(hi >= 0, prop > hi,
+                                             prop > _F(2) * np.maximum(g, lo))
             fallback = ~finite | osc | outside
             prop = np.where(fallback, np.where(hi >= 0, _F(0.5) * (lo + hi), g), prop)
         else:
