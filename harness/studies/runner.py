@@ -14,12 +14,22 @@ from typing import Any
 from harness.geometry import build_geometry
 from harness.scene import Scene, with_settings
 
-__all__ = ["RealtimeRunner", "frame_seconds"]
+__all__ = ["CAMERA_PASSES", "RealtimeRunner", "caustic_seconds", "frame_seconds"]
+
+#: Passes that only serve the camera image, not the receiver irradiance maps.
+CAMERA_PASSES = ("camera", "shadow_map")
 
 
 def frame_seconds(timings: dict[str, float]) -> float:
     """Seconds of one frame: the sum of its passes."""
     return float(sum(timings.values()))
+
+
+def caustic_seconds(timings: dict[str, float]) -> float:
+    """Seconds of the passes that produce the receiver irradiance maps (everything
+    but :data:`CAMERA_PASSES`): the like-for-like cost against the photon tracer,
+    which produces only those maps."""
+    return float(sum(v for k, v in timings.items() if k not in CAMERA_PASSES))
 
 
 class RealtimeRunner:
@@ -50,12 +60,13 @@ class RealtimeRunner:
         scene = with_settings(self.scene, overrides) if overrides else self.scene
         return render_frame(scene, ctx=self.ctx, geometry=self.geometry)
 
-    def timed(self, **overrides: Any):
-        """(frame, seconds): the median frame time over ``repeats`` renders, after a
-        warm-up render on first use (shader compilation is not a frame cost)."""
+    def timed(self, *, clock=frame_seconds, **overrides: Any):
+        """(frame, seconds): the median of ``clock(timings)`` over ``repeats``
+        renders, after a warm-up render on first use (shader compilation is not a
+        frame cost). ``clock`` is :func:`frame_seconds` or :func:`caustic_seconds`."""
         if not self._warm:
             self.render(**overrides)
             self._warm = True
         frames = [self.render(**overrides) for _ in range(self.repeats)]
-        seconds = statistics.median(frame_seconds(f.result.timings) for f in frames)
+        seconds = statistics.median(clock(f.result.timings) for f in frames)
         return frames[-1], seconds
