@@ -20,6 +20,7 @@ COMMAND_MODULES = (
     "renderers.mitsuba.cli",
     "renderers.caustics_mapping.cli",
     "harness.compare_commands",
+    "harness.figures_commands",
 )
 
 

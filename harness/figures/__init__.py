@@ -1,0 +1,22 @@
+"""Analogues of the paper's figures, each written with the data it was drawn from."""
+
+from harness.figures.bunny import figure_10, figure_13a
+from harness.figures.common import FigureContext, FigureResult
+from harness.figures.ring import figure_12
+from harness.figures.sphere import figure_06, figure_07, figure_11, figure_13b
+from harness.figures.water import figure_05, figure_08
+
+#: Figure name to the function that draws it, in the paper's order.
+FIGURES = {
+    "fig05": figure_05,
+    "fig06": figure_06,
+    "fig07": figure_07,
+    "fig08": figure_08,
+    "fig10": figure_10,
+    "fig11": figure_11,
+    "fig12": figure_12,
+    "fig13a": figure_13a,
+    "fig13b": figure_13b,
+}
+
+__all__ = ["FIGURES", "FigureContext", "FigureResult"]
