@@ -21,6 +21,7 @@ COMMAND_MODULES = (
     "renderers.caustics_mapping.cli",
     "harness.compare_commands",
     "harness.figures_commands",
+    "harness.accuracy_commands",
 )
 
 

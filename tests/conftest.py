@@ -1,10 +1,14 @@
-"""Shared fixtures: paths into the repository and a minimal valid scene."""
+"""Shared fixtures: paths into the repository, a minimal valid scene, and the GL
+context in the style of moderngl's own tests/conftest.py: ONE context factory for
+the session, and a ``ctx`` fixture asserting GL_NO_ERROR before and after a test."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import pytest
+
+from renderers.caustics_mapping import create_context
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / "scenes"
@@ -53,3 +57,20 @@ def minimal_scene_text() -> str:
 def all_scene_files() -> list[Path]:
     """Every committed scene file: paper scenes and hard cases."""
     return sorted(SCENES.glob("*.toml")) + sorted((SCENES / "hard").glob("*.toml"))
+
+
+@pytest.fixture(scope="session")
+def context_factory():
+    """The one place a GL context is created; shared by the whole session."""
+    ctx = create_context()
+    yield lambda: ctx
+    ctx.release()
+
+
+@pytest.fixture
+def ctx(context_factory):
+    """The session's context, asserting GL_NO_ERROR before and after the test."""
+    context = context_factory()
+    assert context.error == "GL_NO_ERROR"
+    yield context
+    assert context.error == "GL_NO_ERROR"

@@ -21,6 +21,7 @@ from harness.compare.records import SceneComparison
 from harness.compare.regions import caustic_region, object_mask
 from harness.metrics.tonemap import luminance
 from harness.scene import Scene, effects_of, with_settings
+from harness.stability import stability_summary
 from harness.studies.claims import check_five_iterations, check_one_iteration
 from harness.studies.convergence_study import convergence_study
 from harness.studies.cost_study import cost_study
@@ -161,6 +162,7 @@ def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -
             if bar is not None:
                 bar.close()
 
+    stability = stability_summary(scene, runner.geometry, test, convergence)
     provenance = {
         "scene_file": scene.source,
         "caustics_mapping": {
@@ -186,7 +188,7 @@ def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -
         effects=effects_of(scene), settings=asdict(scene.settings), metrics=tuple(metrics),
         images=images, exposure=exposure, convergence=convergence, cost=cost,
         speedup=speedup, claims=claims, provenance=provenance, files=files,
-        speedup_point=speedup_point)
+        stability=stability, speedup_point=speedup_point)
 
 
 def _claims(convergence) -> dict[str, str]:
