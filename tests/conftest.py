@@ -74,3 +74,27 @@ def ctx(context_factory):
     assert context.error == "GL_NO_ERROR"
     yield context
     assert context.error == "GL_NO_ERROR"
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    """Say how many accuracy bounds and hard cases this run checked."""
+    reports = [r for key in ("passed", "failed") for r in terminalreporter.stats.get(key, [])
+               if getattr(r, "when", "call") == "call"]
+    bound_scenes, hard_cases = set(), set()
+    for report in reports:
+        node = report.nodeid
+        if "test_accuracy_thresholds.py::test_bounds_hold[" in node:
+            bound_scenes.add(node.split("[", 1)[1].rstrip("]"))
+        if "test_stability.py::test_hard_case_is_stable[" in node:
+            hard_cases.add(node.split("[", 1)[1].rstrip("]").split("-")[-1])
+    if not (bound_scenes or hard_cases):
+        return
+    from harness.thresholds import load_thresholds  # noqa: PLC0415
+
+    bounds = [b for b in load_thresholds(REPO / "tests" / "thresholds.toml")
+              if b.scene in bound_scenes]
+    terminalreporter.write_sep("-", "accuracy and stability")
+    terminalreporter.write_line(f"accuracy bounds checked: {len(bounds)} "
+                                f"({len(bound_scenes)} scenes, tests/thresholds.toml)")
+    terminalreporter.write_line(f"hard cases checked: {len(hard_cases)} "
+                                f"({', '.join(sorted(hard_cases))})")

@@ -14,7 +14,6 @@ from harness.golden import GOLDEN_SCENES, GoldenError, golden_scene, load_golden
 from harness.scene import with_settings
 from harness.thresholds import check_bounds, load_thresholds
 from renderers.caustics_mapping import context as gl_context
-from renderers.caustics_mapping import create_context
 from tests.conftest import REPO, SCENES
 
 GOLDEN = REPO / "tests" / "golden"
@@ -90,9 +89,10 @@ def test_every_bound_fails_on_some_broken_render(renders, ctx_module, name):
     assert keys <= set(caught), f"never fails: {sorted(keys - set(caught))}"
 
 
-def _broken_source(monkeypatch, old, new):
-    """Patch one line of the shader source for the rest of the test (fresh context
-    required: programs are cached per context)."""
+def _broken_source(monkeypatch, ctx, old, new):
+    """Patch one line of the shader source for the rest of the test, on the session
+    context with an empty program cache (restored afterwards), so no broken program
+    outlives the test and no second GL context is made current."""
     original = gl_context._source.__wrapped__
 
     def patched(filename):
@@ -103,6 +103,7 @@ def _broken_source(monkeypatch, old, new):
         return text
 
     monkeypatch.setattr(gl_context, "_source", patched)
+    monkeypatch.setattr(ctx, "extra", {})
 
 
 @pytest.mark.parametrize(("old", "new", "what"), [
@@ -110,16 +111,11 @@ def _broken_source(monkeypatch, old, new):
      "prop = -g;", "sign flip in the modified update"),
     ("flux *= mask;", "flux *= mask * 1.1;", "flux normalisation 10 % off"),
 ])
-def test_shader_breaks_fail_a_threshold(monkeypatch, old, new, what):
+def test_shader_breaks_fail_a_threshold(monkeypatch, ctx, old, new, what):
     """Breaking the estimator or the flux normalisation in the shader itself makes
     at least one glass_sphere bound fail."""
-    _broken_source(monkeypatch, old, new)
-    ctx = create_context()
-    try:
-        scene = golden_scene(SCENES, "glass_sphere")
-        test = realtime_maps(scene, ctx=ctx)
-    finally:
-        ctx.release()
+    _broken_source(monkeypatch, ctx, old, new)
+    test = realtime_maps(golden_scene(SCENES, "glass_sphere"), ctx=ctx)
     reference = [m.irradiance for m in load_golden(GOLDEN, "glass_sphere").receivers]
     failed = [c for c in _checks("glass_sphere", test, reference) if not c.passed]
     assert failed, f"{what}: every bound still holds"
