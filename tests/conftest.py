@@ -71,9 +71,10 @@ def context_factory():
 def ctx(context_factory):
     """The session's context, asserting GL_NO_ERROR before and after the test."""
     context = context_factory()
-    assert context.error == "GL_NO_ERROR"
-    yield context
-    assert context.error == "GL_NO_ERROR"
+    with context:  # current again, whatever other contexts came and went
+        assert context.error == "GL_NO_ERROR"
+        yield context
+        assert context.error == "GL_NO_ERROR"
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus, config):

@@ -147,7 +147,10 @@ def render_frame(
     own = ctx is None
     ctx = ctx or create_context()
     try:
-        return _render(scene, ctx, geometry or build_geometry(scene), lookups)
+        # Make ``ctx`` current: another standalone context created (or released)
+        # since would otherwise receive these GL calls.
+        with ctx:
+            return _render(scene, ctx, geometry or build_geometry(scene), lookups)
     finally:
         if own:
             ctx.release()
