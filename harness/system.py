@@ -71,6 +71,25 @@ def _apt_install(package: str) -> None:
     subprocess.run(install, env=env, check=True, capture_output=True)
 
 
+def _find_or_install(find, package: str, command: str, *, install: bool, missing: str) -> str:
+    """``find()``, else apt-install ``package`` (root and ``install`` only) and find
+    again; SystemSetupError with the exact ``command`` when that is not possible."""
+    path = find()
+    if path:
+        return path
+    can_install = install and hasattr(os, "geteuid") and os.geteuid() == 0
+    if can_install and shutil.which("apt-get"):
+        try:
+            _apt_install(package)
+        except subprocess.CalledProcessError as error:
+            raise SystemSetupError(f"installing {package} failed ({error}); run: {command}") \
+                from None
+        path = find()
+        if path:
+            return path
+    raise SystemSetupError(f"{missing}; as root run: {command}")
+
+
 def ensure_libllvm(*, install: bool = True) -> str:
     """Find libLLVM for Dr.Jit, installing Debian's ``libllvm19`` when root and allowed.
 
@@ -84,24 +103,9 @@ def ensure_libllvm(*, install: bool = True) -> str:
     SystemSetupError
         Not found, and not installable here; the message gives the exact command.
     """
-    path = find_libllvm()
-    if path:
-        return path
-    can_install = install and hasattr(os, "geteuid") and os.geteuid() == 0
-    if can_install and shutil.which("apt-get"):
-        try:
-            _apt_install(LLVM_PACKAGE)
-        except subprocess.CalledProcessError as error:
-            raise SystemSetupError(
-                f"installing {LLVM_PACKAGE} failed ({error}); run: {INSTALL_COMMAND}"
-            ) from None
-        path = find_libllvm()
-        if path:
-            return path
-    raise SystemSetupError(
-        f"Dr.Jit's LLVM backend needs libLLVM >= 16 and none was found; as root run: "
-        f"{INSTALL_COMMAND}"
-    )
+    return _find_or_install(
+        find_libllvm, LLVM_PACKAGE, INSTALL_COMMAND, install=install,
+        missing="Dr.Jit's LLVM backend needs libLLVM >= 16 and none was found")
 
 
 def ensure_chromium(*, install: bool = True) -> str:
@@ -117,23 +121,10 @@ def ensure_chromium(*, install: bool = True) -> str:
     SystemSetupError
         Not found, and not installable here; the message gives the exact command.
     """
-    if os.path.isfile(CHROMIUM_PATH):
-        return CHROMIUM_PATH
-    can_install = install and hasattr(os, "geteuid") and os.geteuid() == 0
-    if can_install and shutil.which("apt-get"):
-        try:
-            _apt_install(CHROMIUM_PACKAGE)
-        except subprocess.CalledProcessError as error:
-            raise SystemSetupError(
-                f"installing {CHROMIUM_PACKAGE} failed ({error}); run: "
-                f"{CHROMIUM_INSTALL_COMMAND}"
-            ) from None
-        if os.path.isfile(CHROMIUM_PATH):
-            return CHROMIUM_PATH
-    raise SystemSetupError(
-        f"the report's browser test needs {CHROMIUM_PATH} and it was not found; as root "
-        f"run: {CHROMIUM_INSTALL_COMMAND}"
-    )
+    return _find_or_install(
+        lambda: CHROMIUM_PATH if os.path.isfile(CHROMIUM_PATH) else None,
+        CHROMIUM_PACKAGE, CHROMIUM_INSTALL_COMMAND, install=install,
+        missing=f"the report's browser test needs {CHROMIUM_PATH} and it was not found")
 
 
 def configure_drjit(*, install: bool = True) -> str:

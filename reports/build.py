@@ -35,6 +35,7 @@ import jinja2
 import numpy as np
 from markupsafe import Markup
 
+from harness.compare.outputs import jsonable
 from harness.compare.records import METRIC_FORMULAS, SceneComparison, Table
 from harness.exr import atomic_write_bytes
 from harness.metrics import luminance, white_point
@@ -276,19 +277,6 @@ def _thresholds_summary(comparison: SceneComparison) -> dict[str, int]:
             "total": len(comparison.thresholds)}
 
 
-def _jsonable(value: Any) -> Any:
-    """Provenance and settings for display: numpy scalars/arrays to Python values."""
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
 def _hdr_script(panels: list[dict[str, Any]]) -> str:
     lines = ["window.causticsHdr = window.causticsHdr || {};"]
     for panel in panels:
@@ -315,9 +303,9 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
         "plots": _plot_panels(comparison, assets),
         "files": _file_links(comparison, folder),
         "thresholds": _thresholds_summary(comparison),
-        "provenance": _jsonable(comparison.provenance),
-        "settings": _jsonable(comparison.settings),
-        "stability": _jsonable(comparison.stability),
+        "provenance": jsonable(comparison.provenance),
+        "settings": jsonable(comparison.settings),
+        "stability": jsonable(comparison.stability),
         "self_contained": self_contained,
         "static": "../_static/",
         "css": _static("report.css") if self_contained else "",

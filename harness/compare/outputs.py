@@ -22,23 +22,24 @@ from harness.exr import atomic_write_bytes, write_exr
 __all__ = ["comparison_json", "write_comparison", "write_json", "write_table"]
 
 
-def _jsonable(value: Any) -> Any:
+def jsonable(value: Any) -> Any:
+    """Plain JSON values: numpy to Python, NaN to null, ±inf to "inf"/"-inf"."""
     if isinstance(value, float) and not math.isfinite(value):
         return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
     if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
+        return [jsonable(v) for v in value]
     if isinstance(value, np.generic):
-        return _jsonable(value.item())
+        return jsonable(value.item())
     if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
+        return jsonable(value.tolist())
     return value
 
 
 def write_json(path: str | Path, data: Any) -> None:
     """JSON with NaN as null and ±inf as strings (strict JSON), written atomically."""
-    text = json.dumps(_jsonable(data), indent=2, allow_nan=False)
+    text = json.dumps(jsonable(data), indent=2, allow_nan=False)
     atomic_write_bytes(path, (text + "\n").encode("utf-8"))
 
 
