@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import platform
 from dataclasses import asdict, dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -95,6 +96,63 @@ def _progress_bar(total: int, enabled: bool, label: str):
     return bar, (lambda: bar.update(1))
 
 
+class _View(NamedTuple):
+    """One scored image: the camera or a receiver map, with its regions."""
+
+    name: str
+    test: np.ndarray
+    reference: np.ndarray
+    independent: np.ndarray
+    regions: dict[str, np.ndarray]
+    masks: dict[str, np.ndarray]
+    exposure_mask: np.ndarray | None
+
+
+def _views(scene: Scene, geometry, test, reference, independent):
+    """The views to score, and why the camera is left out (None if it is not)."""
+    views, note = [], None
+    if _camera_is_blind(reference.camera, test.camera):
+        note = ("camera not compared: the reference camera image is black "
+                "(ptracer cannot see receivers through a specular surface)")
+    else:
+        obj = object_mask(scene.camera, geometry)
+        views.append(_View("camera", test.camera, reference.camera, independent.camera,
+                           {"full": np.ones(obj.shape, bool), "object_masked": ~obj},
+                           {"mask_object": obj}, ~obj))
+    for i, (rt_map, ref_map, ind_map) in enumerate(zip(
+            test.receivers, reference.receivers, independent.receivers, strict=True)):
+        caustic = caustic_region(ref_map.irradiance)
+        views.append(_View(f"receiver{i}", rt_map.irradiance, ref_map.irradiance,
+                           ind_map.irradiance,
+                           {"full": np.ones(caustic.shape, bool), "caustic": caustic},
+                           {"mask_caustic": caustic}, None))
+    return views, note
+
+
+def _score_views(views: list[_View]):
+    """Metrics, images, per-view exposure and EXR file names of every view."""
+    metrics, images, files = [], {}, {}
+    exposure = {"white": {}, "flip_start": {}, "flip_stop": {}, "diff_range": {}}
+    for view in views:
+        expo = exposure_for(view.reference, mask=view.exposure_mask)
+        values, maps = score_view(view.name, view.test, view.reference, view.independent,
+                                  regions=view.regions, exposure=expo)
+        metrics += values
+        images.update(maps)
+        images[f"{view.name}/test"] = np.asarray(view.test, np.float32)
+        images[f"{view.name}/reference"] = np.asarray(view.reference, np.float32)
+        for name, mask in view.masks.items():
+            images[f"{view.name}/{name}"] = mask
+        exposure["white"][view.name] = expo.white
+        exposure["flip_start"][view.name] = expo.flip_start
+        exposure["flip_stop"][view.name] = expo.flip_stop
+        signed = np.abs(maps[f"{view.name}/signed"])
+        exposure["diff_range"][view.name] = float(np.percentile(signed, 99.5)) or 1.0
+        for kind in ("test", "reference", "signed", "ssim", "flip"):
+            files[f"{view.name}/{kind}"] = f"{view.name}_{kind}.exr"
+    return metrics, images, exposure, files
+
+
 def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -> SceneComparison:
     """Render ``scene`` both ways and compare (see the module docstring)."""
     reference, independent = _references(scene, options)
@@ -102,43 +160,8 @@ def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -
         frame, frame_time = runner.timed()
         test = frame.result
         gl_renderer = runner.ctx.info.get("GL_RENDERER", "unknown")
-        metrics, images, exposure, files = [], {}, {"white": {}, "flip_start": {},
-                                                     "flip_stop": {}, "diff_range": {}}, {}
-        views, camera_note = [], None
-
-        camera_ref = reference.camera
-        if _camera_is_blind(camera_ref, test.camera):
-            camera_note = ("camera not compared: the reference camera image is black "
-                           "(ptracer cannot see receivers through a specular surface)")
-        else:
-            obj = object_mask(scene.camera, runner.geometry)
-            views.append(("camera", test.camera, camera_ref, independent.camera,
-                          {"full": np.ones(obj.shape, bool), "object_masked": ~obj},
-                          {"mask_object": obj}, ~obj))
-        for i, (rt_map, ref_map, ind_map) in enumerate(zip(
-                test.receivers, reference.receivers, independent.receivers, strict=True)):
-            caustic = caustic_region(ref_map.irradiance)
-            views.append((f"receiver{i}", rt_map.irradiance, ref_map.irradiance,
-                          ind_map.irradiance, {"full": np.ones(caustic.shape, bool),
-                                               "caustic": caustic},
-                          {"mask_caustic": caustic}, None))
-        for view, rt_image, ref_image, ind_image, regions, masks, expo_mask in views:
-            expo = exposure_for(ref_image, mask=expo_mask)
-            values, maps = score_view(view, rt_image, ref_image, ind_image, regions=regions,
-                                      exposure=expo)
-            metrics += values
-            images.update(maps)
-            images[f"{view}/test"] = np.asarray(rt_image, np.float32)
-            images[f"{view}/reference"] = np.asarray(ref_image, np.float32)
-            for name, mask in masks.items():
-                images[f"{view}/{name}"] = mask
-            exposure["white"][view] = expo.white
-            exposure["flip_start"][view] = expo.flip_start
-            exposure["flip_stop"][view] = expo.flip_stop
-            exposure["diff_range"][view] = float(np.percentile(np.abs(maps[f"{view}/signed"]),
-                                                               99.5)) or 1.0
-            for kind in ("test", "reference", "signed", "ssim", "flip"):
-                files[f"{view}/{kind}"] = f"{view}_{kind}.exr"
+        views, camera_note = _views(scene, runner.geometry, test, reference, independent)
+        metrics, images, exposure, files = _score_views(views)
 
         convergence = cost = speedup = speedup_point = None
         claims = {}
