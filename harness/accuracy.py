@@ -32,8 +32,8 @@ from harness.golden import GOLDEN_SETTINGS, golden_scene, load_golden
 from harness.scene import Scene, with_settings
 from harness.thresholds import Bound
 
-__all__ = ["THRESHOLD_METRICS", "accuracy_metrics", "calibrate", "realtime_maps",
-           "write_thresholds"]
+__all__ = ["THRESHOLD_METRICS", "accuracy_metrics", "calibrate", "golden_checks",
+           "realtime_maps", "write_thresholds"]
 
 #: (region, metric, kind) bounded for every receiver of every golden scene.
 THRESHOLD_METRICS = (("caustic", "relmse", "max"), ("caustic", "ssim", "min"),
@@ -60,6 +60,35 @@ def accuracy_metrics(test_maps, reference_maps) -> list[MetricValue]:
             values.append(MetricValue(f"receiver{i}", region, metric, score_value(
                 metric, test, reference, mask=regions[region], exposure=exposure)))
     return values
+
+
+def golden_checks(scene: Scene, *, scenes_dir: Path, golden_dir: Path, bounds, ctx=None):
+    """The accuracy bounds of ``scene``, checked as the test suite checks them.
+
+    Bounds hold at the golden settings, against the golden references, so the
+    render is repeated at the golden receiver-map resolution, keeping this run's
+    other settings (estimator, iterations, grid, ...): a configuration that breaks a
+    bound shows it. Applies only to a scene whose file is byte-identical to the
+    committed ``scenes_dir/<name>.toml``; returns None otherwise (or without a golden
+    reference for it).
+    """
+    from harness.golden import GoldenError, read_manifest  # noqa: PLC0415
+
+    committed = Path(scenes_dir) / f"{scene.name}.toml"
+    try:
+        same = Path(scene.source).read_bytes() == committed.read_bytes()
+        known = scene.name in read_manifest(golden_dir)["scenes"]
+    except (OSError, GoldenError):
+        return None
+    if not (same and known):
+        return None
+    from harness.thresholds import check_bounds  # noqa: PLC0415
+
+    golden = load_golden(golden_dir, scene.name)
+    at_golden = with_settings(scene, {"receiver_map": GOLDEN_SETTINGS["receiver_map"]})
+    test = realtime_maps(at_golden, ctx=ctx)
+    metrics = accuracy_metrics(test, [m.irradiance for m in golden.receivers])
+    return check_bounds(scene.name, metrics, bounds)
 
 
 def _bound(kind: str, values: np.ndarray) -> tuple[float, float]:

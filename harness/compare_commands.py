@@ -14,6 +14,7 @@ from harness.scene import parse_override, with_settings
 __all__ = ["register", "summary_rows"]
 
 DEFAULT_THRESHOLDS = Path("tests") / "thresholds.toml"
+DEFAULT_GOLDEN = Path("tests") / "golden"
 
 
 def summary_rows(comparisons) -> list[tuple[str, ...]]:
@@ -59,10 +60,12 @@ def _print_summary(comparisons, out_dir: Path, seconds: float) -> None:
 
 
 def _compare(args: argparse.Namespace) -> int:
+    from harness.accuracy import golden_checks  # noqa: PLC0415
     from harness.compare.outputs import write_comparison  # noqa: PLC0415
     from harness.compare.pipeline import STUDIES, CompareOptions, compare_scene  # noqa: PLC0415
+    from harness.figures.common import default_scenes_dir  # noqa: PLC0415
     from harness.scene_commands import load_scenes  # noqa: PLC0415
-    from harness.thresholds import check_bounds, load_thresholds  # noqa: PLC0415
+    from harness.thresholds import load_thresholds  # noqa: PLC0415
     from reports import build_report, scene_folder  # noqa: PLC0415
 
     start = time.perf_counter()
@@ -86,9 +89,12 @@ def _compare(args: argparse.Namespace) -> int:
     comparisons, taken = [], []
     for scene in scenes:
         comparison = compare_scene(scene, options=options)
+        checks = None
         if bounds:
-            comparison = dataclasses.replace(
-                comparison, thresholds=check_bounds(scene.name, comparison.metrics, bounds))
+            checks = golden_checks(scene, scenes_dir=default_scenes_dir(),
+                                   golden_dir=Path(args.golden), bounds=bounds)
+        if checks:
+            comparison = dataclasses.replace(comparison, thresholds=checks)
         folder = scene_folder(scene.name, taken=taken)
         taken.append(folder)
         write_comparison(out_dir / folder, comparison)
@@ -117,7 +123,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="override any setting (repeatable)")
     p.add_argument("--thresholds", metavar="FILE",
-                   help=f"accuracy bounds (default: {DEFAULT_THRESHOLDS} if present)")
+                   help=f"accuracy bounds (default: {DEFAULT_THRESHOLDS} if present); checked "
+                   "at the golden settings against the golden references, for committed "
+                   "scenes only")
+    p.add_argument("--golden", default=str(DEFAULT_GOLDEN), metavar="DIR",
+                   help="golden references the bounds hold against (default: %(default)s)")
     p.add_argument("--fail-on-thresholds", action="store_true",
                    help="exit 3 when a bound fails")
     p.add_argument("--self-contained", action="store_true",

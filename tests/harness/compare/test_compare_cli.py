@@ -6,7 +6,7 @@ import csv
 import json
 
 from harness.cli import main
-from tests.conftest import SCENES
+from tests.conftest import REPO, SCENES
 
 SMALL = ["--set", "photons=100000", "--set", "seeds=2", "--set", "spp=2",
          "--set", "grid=48", "--set", "caustic_map=128", "--set", "positions_map=128",
@@ -68,3 +68,26 @@ def test_compare_rejects_unknown_study(tmp_path, capsys):
     assert main(["compare", str(_small_scene(tmp_path)), "-o", str(tmp_path / "o"),
                  "--studies", "metrics,bogus", "-q"]) == 2
     assert "unknown study bogus" in capsys.readouterr().err
+
+
+def test_compare_checks_bounds_like_the_test_suite(tmp_path, capsys, monkeypatch):
+    """On the committed glass_sphere, `compare` checks the calibrated bounds at the
+    golden settings: all four hold at the scene's own settings; with 0 iterations
+    some fail and --fail-on-thresholds exits 3. A modified copy of the scene is not
+    checked against bounds calibrated for the committed one."""
+    monkeypatch.chdir(REPO)
+    out, cache = tmp_path / "out", tmp_path / "cache"
+    fast = ["--studies", "metrics", "--cache-dir", str(cache), "-q", "--set",
+            "photons=50000", "--set", "seeds=2", "--set", "spp=1"]
+    scene = str(SCENES / "glass_sphere.toml")
+    assert main(["compare", scene, "-o", str(out), *fast]) == 0
+    data = json.loads((out / "glass_sphere" / "metrics.json").read_text())
+    assert len(data["thresholds"]) == 4 and all(t["passed"] for t in data["thresholds"])
+    assert main(["compare", scene, "-o", str(out), *fast, "--iterations", "0",
+                 "--fail-on-thresholds"]) == 3
+    data = json.loads((out / "glass_sphere" / "metrics.json").read_text())
+    assert not all(t["passed"] for t in data["thresholds"])
+    copy = _small_scene(tmp_path)
+    assert main(["compare", str(copy), "-o", str(tmp_path / "copy"), *fast]) == 0
+    data = json.loads((tmp_path / "copy" / "glass_sphere" / "metrics.json").read_text())
+    assert data["thresholds"] == []
