@@ -53,7 +53,12 @@ from harness.scene.model import (
     Scene,
 )
 from renderers.mitsuba import _mi
-from renderers.mitsuba.emission import Target, bounding_sphere, sample_photons
+from renderers.mitsuba.emission import (
+    Target,
+    bounding_sphere,
+    sample_photons,
+    stratified_square,
+)
 from renderers.mitsuba.exporter import ExportedScene, channel_mask, export_scene
 
 __all__ = [
@@ -109,6 +114,28 @@ class PhotonSums:
     total: list
     caustic: list
     photons: int
+
+
+def _lane_rng(n: int, key: int):
+    """One PCG32 per lane, its state and stream both hashed (TEA) from (key, lane).
+
+    Plain ``PCG32(n, key, lane)`` gives lane i the same stream (increment) under
+    every key, only at another offset, and such streams are measurably correlated
+    (about -0.01 between keys for the same lane); with stratified lanes (one lane,
+    one place) that made different seeds' maps correlated, and the K-seed variance
+    too small. Hashing the key into both the state and the stream decorrelates
+    them. The key enters as opaque values: one compiled kernel serves every launch.
+    """
+    mi, dr, _ = _mi.load()
+    key &= 0xFFFFFFFFFFFFFFFF
+    lo = dr.opaque(mi.UInt32, key & 0xFFFFFFFF)
+    hi = dr.opaque(mi.UInt32, key >> 32)
+    lane = dr.arange(mi.UInt32, n)
+    a0, a1 = mi.sample_tea_32(lo, lane, 8)
+    b0, b1 = mi.sample_tea_32(hi ^ a0, a1, 8)
+    state = (mi.UInt64(b0) << 32) | mi.UInt64(a0)
+    seq = (mi.UInt64(b1) << 32) | mi.UInt64(a1)
+    return mi.PCG32(n, state, seq)
 
 
 class PhotonTracer:
@@ -223,12 +250,11 @@ class PhotonTracer:
         )
 
     def _launch(self, n: int, key: int, channel, total, caustic) -> None:
-        mi, dr, _ = _mi.load()
-        # Opaque seed: one compiled kernel serves every launch.
-        state = dr.opaque(mi.UInt64, np.uint64(key & 0xFFFFFFFFFFFFFFFF))
-        rng = mi.PCG32(n, state, dr.arange(mi.UInt64, n))
+        mi, _, _ = _mi.load()
+        rng = _lane_rng(n, key)
+        square = stratified_square(rng, n)
         ray, weight = sample_photons(self.scene.light, self.targets, rng,
-                                     self.scene_center, self.scene_radius)
+                                     self.scene_center, self.scene_radius, square=square)
         weight *= mi.Color3f(*map(float, channel_mask(channel)))
         exported = self.exported[channel]
         if self.direct_unshadowed:
