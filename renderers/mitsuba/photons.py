@@ -53,7 +53,12 @@ from harness.scene.model import (
     Scene,
 )
 from renderers.mitsuba import _mi
-from renderers.mitsuba.emission import Target, bounding_sphere, sample_photons
+from renderers.mitsuba.emission import (
+    Target,
+    bounding_sphere,
+    sample_photons,
+    stratified_square,
+)
 from renderers.mitsuba.exporter import ExportedScene, channel_mask, export_scene
 
 __all__ = [
@@ -111,6 +116,28 @@ class PhotonSums:
     photons: int
 
 
+def _lane_rng(n: int, key: int):
+    """One PCG32 per lane, its state and stream both hashed (TEA) from (key, lane).
+
+    Plain ``PCG32(n, key, lane)`` gives lane i the same stream (increment) under
+    every key, only at another offset, and such streams are measurably correlated
+    (about -0.01 between keys for the same lane); with stratified lanes (one lane,
+    one place) that made different seeds' maps correlated, and the K-seed variance
+    too small. Hashing the key into both the state and the stream decorrelates
+    them. The key enters as opaque values: one compiled kernel serves every launch.
+    """
+    mi, dr, _ = _mi.load()
+    key &= 0xFFFFFFFFFFFFFFFF
+    lo = dr.opaque(mi.UInt32, key & 0xFFFFFFFF)
+    hi = dr.opaque(mi.UInt32, key >> 32)
+    lane = dr.arange(mi.UInt32, n)
+    a0, a1 = mi.sample_tea_32(lo, lane, 8)
+    b0, b1 = mi.sample_tea_32(hi ^ a0, a1, 8)
+    state = (mi.UInt64(b0) << 32) | mi.UInt64(a0)
+    seq = (mi.UInt64(b1) << 32) | mi.UInt64(a1)
+    return mi.PCG32(n, state, seq)
+
+
 class PhotonTracer:
     """A scene prepared for photon tracing (exported once, traced many times).
 
@@ -122,11 +149,29 @@ class PhotonTracer:
         Map size per receiver; default ``settings.receiver_map``.
     extents : list of (umin, umax, vmin, vmax), optional
         Per receiver; default the receiver's own (u, v) extent.
+    caustic_only : bool
+        Trace only what the caustic maps need (default False: totals too).
+
+        The caustic maps count specular chains only (every counted chain's first
+        event is on a caustic object: "L S+ D", "L T T D", "L T D", "L R D"), so a
+        photon can contribute only if its emitted ray reaches a caustic object,
+        i.e. its direction (point/spot light) or its origin on the plane
+        perpendicular to the light (directional light) lies in the cone or disk of
+        that object's bounding sphere. With ``caustic_only`` the emission mixture
+        has the object targets alone (q_j proportional to their size, summing to
+        one, no share aimed at receivers) and the photon's weight divides by that
+        mixture pdf. Its support is the union of the object targets, which holds
+        every direction that can start a counted chain, so each caustic map's
+        expectation is the same integral as with the default mixture (whose
+        receiver share only ever lands in the direct term); only its variance
+        changes. The direct term is then not traced at all: ``PhotonSums.total``
+        is None. Area lights are not focused in either mode; without caustic
+        objects the default targets are kept (the caustic maps are zero anyway).
     """
 
     def __init__(self, scene: Scene, *, geometry: SceneGeometry | None = None,
                  resolution: tuple[int, int] | None = None,
-                 extents: list | None = None) -> None:
+                 extents: list | None = None, caustic_only: bool = False) -> None:
         _, _, variant = _mi.load()
         if not variant.startswith(("llvm", "cuda")):
             raise _mi.MitsubaError(
@@ -145,14 +190,16 @@ class PhotonTracer:
             c: export_scene(scene, geometry=self.geometry, channel=c) for c in self.channels
         }
         info = scene.info
-        self.direct_full = info.direct_lighting and info.shadows
-        self.direct_unshadowed = info.direct_lighting and not info.shadows
+        self.caustic_only = bool(caustic_only)
+        direct = info.direct_lighting and not self.caustic_only
+        self.direct_full = direct and info.shadows
+        self.direct_unshadowed = direct and not info.shadows
         self.receivers_only: ExportedScene | None = (
             export_scene(scene, geometry=self.geometry, include_objects=False)
             if self.direct_unshadowed else None
         )
         targets = [bounding_sphere(o.mesh, "object") for o in self.geometry.objects]
-        if info.direct_lighting:
+        if direct or not targets:
             targets += [bounding_sphere(r.mesh, "receiver") for r in self.geometry.receivers]
         self.targets: list[Target] = targets
         allp = np.concatenate([r.mesh.positions for r in self.geometry.receivers]
@@ -162,9 +209,14 @@ class PhotonTracer:
         self.scene_radius = float(np.linalg.norm(hi - lo) / 2) + 1e-3
         chains = [_chain_code(event_chain(o)) if event_chain(o) else -1 for o in scene.objects]
         self.chain_codes = chains
-        self.max_events = MAX_SPECULAR_EVENTS if self.all_paths else max(
-            [len(event_chain(o).split()) - 2 for o in scene.objects if event_chain(o)] or [0]
-        )
+        lengths = [len(event_chain(o).split()) - 2 for o in scene.objects if event_chain(o)]
+        self.max_events = MAX_SPECULAR_EVENTS if self.all_paths else max(lengths or [0])
+        # Depths at which a photon reaching a receiver can be counted (elsewhere the
+        # deposit's mask is false for every lane and is left out of the kernel).
+        counted = set(range(1, self.max_events + 1)) if self.all_paths else set(lengths)
+        if self.direct_full:
+            counted.add(0)
+        self.deposit_depths = frozenset(counted)
 
     # ----------------------------------------------------------------- tracing
     def trace(self, photons: int, *, seed: int, stream: int = 0,
@@ -172,12 +224,14 @@ class PhotonTracer:
         """Trace ``photons`` photons (rounded up to whole batches) per channel pass.
 
         ``seed`` and ``stream`` select independent random sequences: (seed, stream)
-        pairs never share a PCG32 sequence.
+        pairs never share a PCG32 sequence. With ``caustic_only`` the sums' ``total``
+        is None.
         """
         mi, dr, _ = _mi.load()
         w, h = self.resolution
         n_rec = len(self.extents)
-        total = [dr.zeros(mi.Float, w * h * 3) for _ in range(n_rec)]
+        total = None if self.caustic_only else [dr.zeros(mi.Float, w * h * 3)
+                                                for _ in range(n_rec)]
         caustic = [dr.zeros(mi.Float, w * h * 3) for _ in range(n_rec)]
         batch = max(1, min(batch, photons))
         launches = -(-photons // batch)
@@ -189,18 +243,18 @@ class PhotonTracer:
                 dr.eval(total, caustic)
         shape = (h, w, 3)
         return PhotonSums(
-            total=[np.asarray(t, dtype=np.float64).reshape(shape) for t in total],
+            total=None if total is None
+            else [np.asarray(t, dtype=np.float64).reshape(shape) for t in total],
             caustic=[np.asarray(t, dtype=np.float64).reshape(shape) for t in caustic],
             photons=launches * batch,
         )
 
     def _launch(self, n: int, key: int, channel, total, caustic) -> None:
-        mi, dr, _ = _mi.load()
-        # Opaque seed: one compiled kernel serves every launch.
-        state = dr.opaque(mi.UInt64, np.uint64(key & 0xFFFFFFFFFFFFFFFF))
-        rng = mi.PCG32(n, state, dr.arange(mi.UInt64, n))
+        mi, _, _ = _mi.load()
+        rng = _lane_rng(n, key)
+        square = stratified_square(rng, n)
         ray, weight = sample_photons(self.scene.light, self.targets, rng,
-                                     self.scene_center, self.scene_radius)
+                                     self.scene_center, self.scene_radius, square=square)
         weight *= mi.Color3f(*map(float, channel_mask(channel)))
         exported = self.exported[channel]
         if self.direct_unshadowed:
@@ -235,8 +289,9 @@ class PhotonTracer:
                 ok &= ~mixed
             if self.direct_full:
                 ok |= code == 0
-            self._deposit(si, ray.d, weight, hit & ok, receiver_ids=exported.receiver_ids,
-                          total=total, caustic=caustic if depth > 0 else None)
+            if depth in self.deposit_depths:
+                self._deposit(si, ray.d, weight, hit & ok, receiver_ids=exported.receiver_ids,
+                              total=total, caustic=caustic if depth > 0 else None)
             if depth == self.max_events:
                 break
             is_obj = mi.Bool(False)
@@ -307,7 +362,8 @@ class PhotonTracer:
                      + mi.UInt32(dr.clip(fu, 0, w - 1))) * 3
             value = weight / (texel_area * dr.select(jac > 0, jac, 1.0))
             for ch in range(3):
-                dr.scatter_reduce(dr.ReduceOp.Add, total[r], value[ch], index + ch, m)
+                if total is not None:
+                    dr.scatter_reduce(dr.ReduceOp.Add, total[r], value[ch], index + ch, m)
                 if caustic is not None:
                     dr.scatter_reduce(dr.ReduceOp.Add, caustic[r], value[ch], index + ch, m)
 

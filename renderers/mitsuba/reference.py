@@ -36,9 +36,9 @@ class ReceiverEstimate:
 
     Attributes
     ----------
-    maps : list of ReceiverMap
+    maps : list of ReceiverMap, or None
         Mean total irradiance (direct light and the counted chains; W/m², (H, W, 3),
-        row 0 at vmin) and its variance of the mean.
+        row 0 at vmin) and its variance of the mean. None with ``caustic_only``.
     caustic : list of ReceiverMap
         Mean caustic irradiance (the counted chains only, no direct light: what the
         radiometric contract calls the receiver map), with its variance of the mean.
@@ -66,10 +66,14 @@ def _progress(total: int, desc: str, enabled: bool):
 def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int | None = None,
                        seed: int | None = None, target_noise: float | None = None,
                        resolution: tuple[int, int] | None = None, extents: list | None = None,
-                       batch: int = DEFAULT_BATCH, progress: bool = False) -> ReceiverEstimate:
+                       batch: int = DEFAULT_BATCH, progress: bool = False,
+                       caustic_only: bool = False) -> ReceiverEstimate:
     """Trace receiver maps with K seeds until the noise target or the budget.
 
     Parameters default to ``scene.settings`` (photons = budget per seed).
+    ``caustic_only`` traces only the caustic maps (see :class:`.PhotonTracer`:
+    every photon is aimed at the caustic objects, none at the receivers; same
+    expectation, less noise per photon); ``maps`` is then None.
     """
     s = scene.settings
     budget = photons if photons is not None else s.photons
@@ -77,7 +81,8 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
     first = seed if seed is not None else s.seed
     target = target_noise if target_noise is not None else s.target_noise
     start = time.perf_counter()
-    tracer = PhotonTracer(scene, resolution=resolution, extents=extents)
+    tracer = PhotonTracer(scene, resolution=resolution, extents=extents,
+                          caustic_only=caustic_only)
     per_round = max(1, min(batch, budget))
     n_rec = len(tracer.extents)
     sums_total = [[0.0] * n_rec for _ in range(k)]
@@ -90,18 +95,20 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
             for i in range(k):
                 sums = tracer.trace(n, seed=first + i, stream=stream, batch=per_round)
                 for r in range(n_rec):
-                    sums_total[i][r] = sums_total[i][r] + sums.total[r]
+                    if not caustic_only:
+                        sums_total[i][r] = sums_total[i][r] + sums.total[r]
                     sums_caustic[i][r] = sums_caustic[i][r] + sums.caustic[r]
             traced += sums.photons
             stream += 1
             noises, maps, caustic = [], [], []
             for r in range(n_rec):
-                mean, var = seed_statistics(np.stack([t[r] for t in sums_total]) / traced)
                 cmean, cvar = seed_statistics(np.stack([c[r] for c in sums_caustic]) / traced)
                 # Noise of what is compared: the caustic map, over its caustic region.
                 noises.append(relative_noise(cmean, cvar, caustic_region(cmean)))
-                maps.append(ReceiverMap(mean.astype(np.float32), tracer.extents[r],
-                                        var.astype(np.float32)))
+                if not caustic_only:
+                    mean, var = seed_statistics(np.stack([t[r] for t in sums_total]) / traced)
+                    maps.append(ReceiverMap(mean.astype(np.float32), tracer.extents[r],
+                                            var.astype(np.float32)))
                 caustic.append(ReceiverMap(cmean.astype(np.float32), tracer.extents[r],
                                            cvar.astype(np.float32)))
             finite = [x for x in noises if np.isfinite(x)]
@@ -113,8 +120,9 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
             if np.isfinite(noise) and noise <= target:
                 stopped = "target_noise"
                 break
-    return ReceiverEstimate(maps=maps, caustic=caustic, photons=traced, relative_noise=noise,
-                            stopped_by=stopped, history=history, seeds=k, seed=first,
+    return ReceiverEstimate(maps=None if caustic_only else maps, caustic=caustic,
+                            photons=traced, relative_noise=noise, stopped_by=stopped,
+                            history=history, seeds=k, seed=first,
                             channel_passes=len(tracer.channels))
 
 
@@ -123,7 +131,8 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> Render
     geometry = build_geometry(scene)
     timings = {}
     start = time.perf_counter()
-    est = estimate_receivers(scene, progress=progress)
+    # Only the caustic maps are kept: no photon is spent on the direct light.
+    est = estimate_receivers(scene, progress=progress, caustic_only=True)
     timings["receiver_maps"] = time.perf_counter() - start
     start = time.perf_counter()
     frames = []
