@@ -95,7 +95,9 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
     bounds = [b for b in load_thresholds(REPO / "tests" / "thresholds.toml")
               if b.scene in bound_scenes]
     terminalreporter.write_sep("-", "accuracy and stability")
-    terminalreporter.write_line(f"accuracy bounds checked: {len(bounds)} "
-                                f"({len(bound_scenes)} scenes, tests/thresholds.toml)")
-    terminalreporter.write_line(f"hard cases checked: {len(hard_cases)} "
-                                f"({', '.join(sorted(hard_cases))})")
+    if bound_scenes:
+        terminalreporter.write_line(f"accuracy bounds checked: {len(bounds)} "
+                                    f"({len(bound_scenes)} scenes, tests/thresholds.toml)")
+    if hard_cases:
+        terminalreporter.write_line(f"hard cases checked: {len(hard_cases)} "
+                                    f"({', '.join(sorted(hard_cases))})")
