@@ -11,7 +11,7 @@ import numpy as np
 
 from harness.geometry import SceneGeometry
 from harness.scene.model import Camera, ConductorMaterial, DielectricMaterial
-from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup, look_at
 from renderers.caustics_mapping.meshes import GpuMesh
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
@@ -67,9 +67,10 @@ def render_camera(
 ) -> np.ndarray:
     """Render the camera image (W m^-2 sr^-1), row 0 at the top."""
     w, h = camera.resolution
-    color = ctx.texture((w, h), 4, dtype="f4")
-    depth = ctx.depth_texture((w, h))
-    fbo = ctx.framebuffer([color], depth)
+    resources = pool(ctx)
+    color = resources.texture((w, h))
+    depth = resources.depth_texture((w, h))
+    fbo = resources.framebuffer([color], depth)
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
     ctx.enable(moderngl.DEPTH_TEST)
@@ -120,7 +121,6 @@ def render_camera(
         vao.render(moderngl.TRIANGLES)
         vao.release()
     image = np.frombuffer(color.read(), np.float32).reshape(h, w, 4)[::-1, :, :3].copy()
-    release_framebuffer(ctx, fbo)
-    color.release()
-    depth.release()
+    resources.give_back(color)
+    resources.give_back(depth)
     return image

@@ -15,7 +15,7 @@ import moderngl
 import numpy as np
 
 from harness.scene.model import ConductorMaterial, DielectricMaterial
-from renderers.caustics_mapping.context import load_program
+from renderers.caustics_mapping.context import ResourcePool, load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.object_positions import ObjectSurfaces
 from renderers.caustics_mapping.receiver_positions import ReceiverPositions
@@ -112,9 +112,10 @@ class Trace:
             "normal": rec[:, 4, :3].copy(), "history": hist.copy(),
         }
 
-    def release(self) -> None:
-        self.records.release()
-        self.history.release()
+    def give_back(self, resources: ResourcePool) -> None:
+        """Return the buffers to the context's pool."""
+        resources.give_back(self.records)
+        resources.give_back(self.history)
 
 
 def run_caustic_trace(
@@ -136,8 +137,9 @@ def run_caustic_trace(
         Refinements of the image-space exit point (double refraction).
     """
     count = len(light.object_views) * grid * grid
-    records = ctx.buffer(reserve=count * RECORD_FLOATS * 4)
-    history = ctx.buffer(reserve=count * (iterations + 1) * 4)
+    resources = pool(ctx)
+    records = resources.buffer(count * RECORD_FLOATS * 4)        # every record is written
+    history = resources.buffer(count * (iterations + 1) * 4)     # every entry is written
     program = load_program(ctx, "caustic_trace.glsl")
     set_light_uniforms(program, light)
     set_object_view_uniforms(program, light)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.context import ResourcePool, load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.meshes import GpuMesh
 from renderers.caustics_mapping.uniforms import set_light_uniforms
@@ -35,9 +35,10 @@ class ReceiverPositions:
         data = np.frombuffer(self.positions.read(), np.float32)
         return data.reshape(self.size, -1, 4)
 
-    def release(self) -> None:
+    def give_back(self, resources: ResourcePool) -> None:
+        """Return the textures to the context's pool."""
         for tex in (self.positions, self.normals, self.uvs):
-            tex.release()
+            resources.give_back(tex)
 
 
 def render_receiver_positions(
@@ -47,11 +48,10 @@ def render_receiver_positions(
     """Render every receiver into the map views ``light.map_faces``, one atlas slot
     each (``faces`` must equal them). Cube faces not stored report "no receiver"."""
     width = len(light.map_faces) * size
-    textures = [ctx.texture((width, size), 4, dtype="f4") for _ in range(3)]
-    for tex in textures:
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    depth = ctx.depth_texture((width, size))
-    fbo = ctx.framebuffer(textures, depth)
+    resources = pool(ctx)
+    textures = [resources.texture((width, size)) for _ in range(3)]
+    depth = resources.depth_texture((width, size))
+    fbo = resources.framebuffer(textures, depth)
     program = load_program(ctx, "receiver_positions.glsl")
     set_light_uniforms(program, light)
     fbo.use()
@@ -67,6 +67,5 @@ def render_receiver_positions(
             vao.render(moderngl.TRIANGLES)
     for vao in vaos:
         vao.release()
-    release_framebuffer(ctx, fbo)
-    depth.release()
+    resources.give_back(depth)
     return ReceiverPositions(*textures, size=size, faces=faces)

@@ -24,7 +24,7 @@ from renderers.caustics_mapping.caustic_trace import (
     material_table,
     run_caustic_trace,
 )
-from renderers.caustics_mapping.context import GLError, PassTimer, create_context
+from renderers.caustics_mapping.context import GLError, PassTimer, create_context, pool
 from renderers.caustics_mapping.estimators import MapLookup
 from renderers.caustics_mapping.lights import CUBE_FACES, LightSetup, light_setups
 from renderers.caustics_mapping.lowpass import lowpass_filter
@@ -150,7 +150,10 @@ def render_frame(
         # Make ``ctx`` current: another standalone context created (or released)
         # since would otherwise receive these GL calls.
         with ctx:
-            return _render(scene, ctx, geometry or build_geometry(scene), lookups)
+            try:
+                return _render(scene, ctx, geometry or build_geometry(scene), lookups)
+            finally:
+                pool(ctx).end_frame()
     finally:
         if own:
             ctx.release()
@@ -167,6 +170,7 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
     s = scene.settings
     effects = effects_of(scene)
     timer = PassTimer(ctx)
+    resources = pool(ctx)
     passes: list[str] = []
 
     def ran(name: str) -> None:
@@ -235,8 +239,7 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
                 ran(name)
                 traces.append(trace)
         csize = s.caustic_map
-        caustic = ctx.texture((len(faces) * csize, csize), 4, dtype="f4")
-        caustic.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        caustic = resources.texture((len(faces) * csize, csize))
         with timer.measure("caustic_map"):
             splat_caustic_map(ctx, light, traces, caustic, size=csize, faces=faces,
                               sigma=s.splat_sigma, cut=s.splat_radius)
@@ -244,17 +247,17 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
         if s.lowpass:
             with timer.measure("lowpass"):
                 filtered = lowpass_filter(ctx, caustic, size=csize)
-            caustic.release()
+            resources.give_back(caustic)
             caustic = filtered
             ran("lowpass")
         with timer.measure("receiver_map"):
             for index, rec in enumerate(geometry.receivers):
-                target = ctx.texture(s.receiver_map, 4, dtype="f4")
+                target = resources.texture(s.receiver_map)
                 splat_receiver_map(ctx, light, traces, target, index=index, receiver=rec,
                                    mapping=mappings[index], positions=positions,
                                    caustic_size=csize, sigma=s.splat_sigma, cut=s.splat_radius)
                 maps[index] += _read_rgba(target)[:, :, :3]
-                target.release()
+                resources.give_back(target)
         ran("receiver_map")
         shadow = None
         if "shadows" in effects:
@@ -275,10 +278,13 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
             data["channel"] = np.full(trace.count, channel, np.int32)
             data["light"] = np.full(trace.count, light_index, np.int32)
             hits.append(data)
-            trace.release()
-        for resource in (caustic, shadow, front, back, positions):
+            trace.give_back(resources)
+        for resource in (front, back, positions):
             if resource is not None:
-                resource.release()
+                resource.give_back(resources)
+        for texture in (caustic, shadow):
+            if texture is not None:
+                resources.give_back(texture)
     error = ctx.error
     for mesh in receivers + objects:
         mesh.release()

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import moderngl
 
-from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.meshes import GpuMesh
 from renderers.caustics_mapping.uniforms import set_light_uniforms
@@ -20,12 +20,13 @@ def render_shadow_map(
     ctx: moderngl.Context, light: LightSetup, objects: list[GpuMesh], *, size: int,
     faces: tuple[int, ...],
 ) -> moderngl.Texture:
-    """Nearest caustic-object distance per texel of the map views in ``faces``."""
+    """Nearest caustic-object distance per texel of the map views in ``faces``
+    (a texture of the context's pool: give it back, do not release it)."""
     views = len(light.map_faces)
-    target = ctx.texture((views * size, size), 4, dtype="f4")
-    target.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    depth = ctx.depth_texture((views * size, size))
-    fbo = ctx.framebuffer([target], depth)
+    resources = pool(ctx)
+    target = resources.texture((views * size, size))
+    depth = resources.depth_texture((views * size, size))
+    fbo = resources.framebuffer([target], depth)
     program = load_program(ctx, "shadow_map.glsl")
     set_light_uniforms(program, light)
     fbo.use()
@@ -40,6 +41,5 @@ def render_shadow_map(
             vao.render(moderngl.TRIANGLES)
     for vao in vaos:
         vao.release()
-    release_framebuffer(ctx, fbo)
-    depth.release()
+    resources.give_back(depth)
     return target
