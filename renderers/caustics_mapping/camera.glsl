@@ -20,7 +20,7 @@ uniform int u_receiver;
 uniform int u_direct;              // scene has direct lighting
 uniform int u_shadows;             // shadows effect
 uniform int u_caustics;            // a caustic map is bound
-uniform sampler2D u_shadow_map;    // RGBA32F: r light distance, g coverage
+uniform sampler2D u_shadow_map;    // RG32F: r light distance, g coverage
 uniform int u_shadow_size;
 uniform float u_shadow_bias;       // m
 uniform sampler2D u_caustic_map;   // RGBA32F: rgb E (W/m^2)

@@ -13,7 +13,7 @@ from harness.geometry import SceneGeometry
 from harness.scene.model import Camera, ConductorMaterial, DielectricMaterial
 from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup, look_at
-from renderers.caustics_mapping.meshes import GpuMesh
+from renderers.caustics_mapping.meshes import GpuMesh, back_faces_hidden
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
 
 __all__ = ["CameraInputs", "camera_matrix", "render_camera"]
@@ -59,24 +59,6 @@ def _plane(geometry: SceneGeometry) -> tuple[float, float, float, float]:
     if n @ mesh.normals.mean(axis=0) < 0:
         n = -n
     return (*n.tolist(), float(n @ c))
-
-
-def _back_faces_hidden(camera: Camera, mesh) -> bool:
-    """Whether the camera can see no back face of ``mesh``: it is closed (outward,
-    counter-clockwise faces), the eye is outside its bounding box and the near plane
-    cuts none of it. Then every pixel a back face covers is covered by a nearer front
-    face, so culling back faces (half the triangles to rasterise and shade) leaves
-    the image as it was."""
-    if not mesh.closed:
-        return False
-    w, h = camera.resolution
-    eye = np.asarray(camera.position, float)
-    t = math.tan(math.radians(camera.fov) / 2)
-    tx, ty = (t, t * h / w) if camera.fov_axis == "x" else (t * w / h, t)
-    near = np.linalg.norm(np.asarray(camera.look_at) - eye) * 1e-3  # as camera_matrix
-    lo, hi = mesh.bounds.astype(float)
-    gap = np.linalg.norm(np.maximum(np.maximum(lo - eye, eye - hi), 0.0))
-    return bool(gap > 2.0 * near * math.sqrt(1.0 + tx * tx + ty * ty))
 
 
 def render_camera(
@@ -136,7 +118,7 @@ def render_camera(
             set_uniform(object_program, "u_material", 3)
             set_uniform(object_program, "u_reflectance", (0.0, 0.0, 0.0))
         vao = mesh.vertex_array(object_program)
-        cull = _back_faces_hidden(camera, geo.mesh)
+        cull = back_faces_hidden(geo.mesh, camera_matrix(camera))
         if cull:
             ctx.enable(moderngl.CULL_FACE)
         vao.render(moderngl.TRIANGLES)
