@@ -1,10 +1,11 @@
 """Pass 3a: refract or reflect at every grid vertex and estimate the receiver hit.
 
-Runs ``caustic_trace.glsl`` as a vertex shader over the ``grid`` x ``grid`` vertices
-of every object view, writing one record per vertex into a shader storage buffer
-(layout in the shader's header) and the estimate after every iteration into a
-second. The splat passes draw the record buffer as point sprites; the renderer reads
-both back for ``hits.npz`` and for the NumPy mirror in :mod:`.estimators`.
+Runs ``caustic_trace.glsl`` as a compute shader over the ``grid`` x ``grid`` vertices
+of every object view (one invocation each), writing one record per vertex into a
+shader storage buffer (layout in the shader's header) and the estimate after every
+iteration into a second. The splat passes draw the record buffer as point sprites;
+the renderer reads both back for ``hits.npz`` and for the NumPy mirror in
+:mod:`.estimators`.
 """
 
 from __future__ import annotations
@@ -140,7 +141,7 @@ def run_caustic_trace(
     resources = pool(ctx)
     records = resources.buffer(count * RECORD_FLOATS * 4)        # every record is written
     history = resources.buffer(count * (iterations + 1) * 4)     # every entry is written
-    program = load_program(ctx, "caustic_trace.glsl")
+    program = load_program(ctx, "caustic_trace.glsl", compute=True)
     set_light_uniforms(program, light)
     set_object_view_uniforms(program, light)
     units = {"u_receiver_positions": positions.positions, "u_receiver_normals": positions.normals,
@@ -166,10 +167,9 @@ def run_caustic_trace(
     set_uniform(program, "u_iterations", iterations)
     set_uniform(program, "u_eps", float(eps))
     set_uniform(program, "u_exit_iterations", exit_iterations)
+    set_uniform(program, "u_count", count)
     records.bind_to_storage_buffer(0)
     history.bind_to_storage_buffer(1)
-    vao = ctx.vertex_array(program, [])
-    vao.render(moderngl.POINTS, vertices=count)
+    program.run((count + 63) // 64)
     ctx.memory_barrier()
-    vao.release()
     return Trace(records, history, count, iterations)

@@ -56,8 +56,8 @@ def _source(name: str) -> str:
 
 def load_program(
     ctx: moderngl.Context, name: str, *, defines: dict[str, object] | None = None,
-    fragment: bool = True,
-) -> moderngl.Program:
+    fragment: bool = True, compute: bool = False,
+) -> moderngl.Program | moderngl.ComputeShader:
     """Compile ``name`` (a ``.glsl`` file beside this module) into a program.
 
     Programs are cached on the context (``ctx.extra``), so repeated frames do not
@@ -71,15 +71,21 @@ def load_program(
         Extra ``#define NAME VALUE`` lines, inserted after ``#version``.
     fragment : bool
         Whether the file has a ``FRAGMENT_SHADER`` section.
+    compute : bool
+        Compile the file's ``COMPUTE_SHADER`` section alone into a compute shader.
     """
     cache = ctx.extra if isinstance(ctx.extra, dict) else {}
     ctx.extra = cache
-    key = ("program", name, tuple(sorted((defines or {}).items())), fragment)
+    key = ("program", name, tuple(sorted((defines or {}).items())), fragment, compute)
     if key in cache:
         return cache[key]
     body = _source(name)
     head = "#version 450 core\n" + f"#define MAX_ITERATIONS {MAX_ITERATIONS}\n"
     head += "".join(f"#define {k} {v}\n" for k, v in (defines or {}).items())
+    if compute:
+        program = ctx.compute_shader(head + "#define COMPUTE_SHADER 1\n" + body)
+        cache[key] = program
+        return program
     vertex = head + "#define VERTEX_SHADER 1\n" + body
     frag = head + "#define FRAGMENT_SHADER 1\n" + body if fragment else None
     program = ctx.program(vertex_shader=vertex, fragment_shader=frag)
