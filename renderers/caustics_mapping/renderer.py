@@ -144,6 +144,19 @@ def render_frame(
     GLError
         A pass left a GL error.
     """
+    return _frame(scene, ctx, geometry, want_lookups=lookups, want_atlas=True)
+
+
+def render(scene: Scene, *, ctx: moderngl.Context | None = None,
+           geometry: SceneGeometry | None = None) -> RenderResult:
+    """Render ``scene``; the :class:`RenderResult` of :func:`render_frame` (without
+    reading back what only the :class:`Frame` holds: the caustic-map atlas and the
+    positions atlases)."""
+    return _frame(scene, ctx, geometry, want_lookups=False, want_atlas=False).result
+
+
+def _frame(scene: Scene, ctx: moderngl.Context | None, geometry: SceneGeometry | None, *,
+           want_lookups: bool, want_atlas: bool) -> Frame:
     own = ctx is None
     ctx = ctx or create_context()
     try:
@@ -151,7 +164,8 @@ def render_frame(
         # since would otherwise receive these GL calls.
         with ctx:
             try:
-                return _render(scene, ctx, geometry or build_geometry(scene), lookups)
+                return _render(scene, ctx, geometry or build_geometry(scene), want_lookups,
+                               want_atlas)
             finally:
                 pool(ctx).end_frame()
     finally:
@@ -159,14 +173,8 @@ def render_frame(
             ctx.release()
 
 
-def render(scene: Scene, *, ctx: moderngl.Context | None = None,
-           geometry: SceneGeometry | None = None) -> RenderResult:
-    """Render ``scene``; the :class:`RenderResult` of :func:`render_frame`."""
-    return render_frame(scene, ctx=ctx, geometry=geometry, lookups=False).result
-
-
 def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
-            want_lookups: bool) -> Frame:
+            want_lookups: bool, want_atlas: bool) -> Frame:
     s = scene.settings
     effects = effects_of(scene)
     timer = PassTimer(ctx)
@@ -271,8 +279,9 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
             camera += render_camera(ctx, light, camera=scene.camera, geometry=geometry,
                                     receivers=receivers, objects=objects, inputs=inputs)
         ran("camera")
-        atlas = _read_rgba(caustic)[:, :, :3]
-        caustic_total = atlas.copy() if caustic_total is None else caustic_total + atlas
+        if want_atlas:
+            atlas = _read_rgba(caustic)[:, :, :3]
+            caustic_total = atlas.copy() if caustic_total is None else caustic_total + atlas
         for channel, trace in zip(channels, traces, strict=False):
             data = trace.read()
             data["channel"] = np.full(trace.count, channel, np.int32)
