@@ -1,8 +1,9 @@
 """Pass 1: receiver positions, normals and (u, v) from the light (paper Section 3.2).
 
-Output: three RGBA32F map atlases of ``settings.positions_map`` texels per face side
-(layout in ``common.glsl``), attachment 0 ``xyz`` world position (m), ``w`` receiver
-index + 1 (0 = none); attachment 1 the receiver normal; attachment 2 its (u, v).
+Output: three map atlases of ``settings.positions_map`` texels per face side (layout
+in ``common.glsl``), attachment 0 (RGBA32F) ``xyz`` world position (m), ``w`` receiver
+index + 1 (0 = none); attachment 1 (RGBA32F) the receiver normal; attachment 2
+(RG32F) its (u, v).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ __all__ = ["ReceiverPositions", "render_receiver_positions"]
 
 @dataclass(eq=False)
 class ReceiverPositions:
-    """The receiver positions atlas and its companions (all RGBA32F)."""
+    """The receiver positions atlas and its companions (RGBA32F; ``uvs`` RG32F)."""
 
     positions: moderngl.Texture
     normals: moderngl.Texture
@@ -49,7 +50,7 @@ def render_receiver_positions(
     each (``faces`` must equal them). Cube faces not stored report "no receiver"."""
     width = len(light.map_faces) * size
     resources = pool(ctx)
-    textures = [resources.texture((width, size)) for _ in range(3)]
+    textures = [resources.texture((width, size), components) for components in (4, 4, 2)]
     depth = resources.depth_texture((width, size))
     fbo = resources.framebuffer(textures, depth)
     program = load_program(ctx, "receiver_positions.glsl")
