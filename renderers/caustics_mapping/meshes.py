@@ -48,7 +48,11 @@ def back_faces_hidden(mesh: TriangleMesh, view_proj: np.ndarray) -> bool:
     counter-clockwise faces) and lies wholly in front of the near plane, so the eye
     is outside it. Every ray from the eye that meets the mesh then enters it through
     a front face first, so with the depth test culling back faces (half the
-    triangles to set up, rasterise and shade) changes no pixel.
+    triangles to set up, rasterise and shade) leaves the image as it was, except
+    where a back face ties the front face in depth at a silhouette (the depth test
+    keeps the first drawn): no pixel of any committed scene changed in the camera or
+    shadow passes; in the object-positions pass one grid texel did (high_ior_tir),
+    so that pass does not cull.
     """
     if not mesh.closed:
         return False

@@ -15,7 +15,7 @@ import moderngl
 
 from renderers.caustics_mapping.context import ResourcePool, load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
-from renderers.caustics_mapping.meshes import GpuMesh, back_faces_hidden
+from renderers.caustics_mapping.meshes import GpuMesh
 from renderers.caustics_mapping.uniforms import set_light_uniforms
 
 __all__ = ["ObjectSurfaces", "render_object_surfaces"]
@@ -72,13 +72,11 @@ def render_object_surfaces(
     ctx.enable(moderngl.DEPTH_TEST)
     ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
     indices = range(len(objects)) if which is None else which
+    # No back-face culling here (unlike the shadow map and camera passes): at a
+    # silhouette a back face can tie the front face in depth at a grid texel, and the
+    # depth test then keeps the first drawn; culling changed one grid record of
+    # scenes/hard/high_ior_tir at its default settings (a cube edge).
     vaos = {i: objects[i].vertex_array(program) for i in indices}
-    # Front surfaces: the nearest surface of a closed object seen from outside is a
-    # front face, so its back faces are culled (no pixel changes). Not for the exit
-    # surfaces, which the shader selects per fragment by the interpolated normal.
-    cull = {(face, i): not back and objects[i].source is not None
-            and back_faces_hidden(objects[i].source, view.view_proj)
-            for face, view in enumerate(views) for i in indices}
 
     def draw() -> None:
         for face, view in enumerate(views):
@@ -86,11 +84,7 @@ def render_object_surfaces(
             program["u_vp"].write(view.view_proj.T.astype("f4").tobytes())
             for index, vao in vaos.items():
                 program["u_object"] = index
-                if cull[face, index]:
-                    ctx.enable(moderngl.CULL_FACE)
                 vao.render(moderngl.TRIANGLES)
-                if cull[face, index]:
-                    ctx.disable(moderngl.CULL_FACE)
 
     draw()
     covered = 0
