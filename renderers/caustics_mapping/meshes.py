@@ -50,9 +50,10 @@ def back_faces_hidden(mesh: TriangleMesh, view_proj: np.ndarray) -> bool:
     a front face first, so with the depth test culling back faces (half the
     triangles to set up, rasterise and shade) leaves the image as it was, except
     where a back face ties the front face in depth at a silhouette (the depth test
-    keeps the first drawn): no pixel of any committed scene changed in the camera or
-    shadow passes; in the object-positions pass one grid texel did (high_ior_tir),
-    so that pass does not cull.
+    keeps the first drawn). Used by the shadow map only, where such a texel's
+    distance differs by rounding and the biased visibility test does not flip (no
+    output of any committed scene changed); the object-positions and camera passes
+    do not cull, as it changed a grid record (high_ior_tir) and 1-3 camera pixels.
     """
     if not mesh.closed:
         return False
