@@ -20,7 +20,7 @@ uniform int u_receiver;
 uniform int u_direct;              // scene has direct lighting
 uniform int u_shadows;             // shadows effect
 uniform int u_caustics;            // a caustic map is bound
-uniform sampler2D u_shadow_map;    // RGBA32F: r light distance, g coverage
+uniform sampler2D u_shadow_map;    // RG32F: r light distance, g coverage
 uniform int u_shadow_size;
 uniform float u_shadow_bias;       // m
 uniform sampler2D u_caustic_map;   // RGBA32F: rgb E (W/m^2)
@@ -42,21 +42,21 @@ vec3 receiver_radiance(vec3 x, vec3 n, vec3 albedo, int receiver) {
     vec3 e = vec3(0.0);
     int face;
     vec2 ndc;
-    ivec2 texel;
+    // One projection into the light's views serves the three map lookups.
+    bool found = map_project(x, face, ndc);
     if (u_direct == 1) {
         float visible = 1.0;
-        if (u_shadows == 1 && map_locate(x, u_shadow_size, face, ndc, texel)) {
-            vec4 s = texelFetch(u_shadow_map, texel, 0);
+        if (u_shadows == 1 && found) {
+            vec4 s = texelFetch(u_shadow_map, map_texel(face, ndc, u_shadow_size), 0);
             if (s.g > 0.5 && s.r < light_distance(x) - u_shadow_bias) visible = 0.0;
         }
         e += visible * direct_irradiance(x, n);
     }
-    if (u_caustics == 1 && map_locate(x, u_positions_size, face, ndc, texel)) {
-        vec4 p = texelFetch(u_positions, texel, 0);
+    if (u_caustics == 1 && found) {
+        vec4 p = texelFetch(u_positions, map_texel(face, ndc, u_positions_size), 0);
         float tol = 3.0 * sqrt(map_texel_area(x, n, ndc, u_positions_size));
         if (int(p.w + 0.5) - 1 == receiver && length(p.xyz - x) <= tol) {
-            map_locate(x, u_caustic_size, face, ndc, texel);
-            e += texelFetch(u_caustic_map, texel, 0).rgb;
+            e += texelFetch(u_caustic_map, map_texel(face, ndc, u_caustic_size), 0).rgb;
         }
     }
     return albedo / 3.14159265358979 * e;

@@ -35,7 +35,9 @@ void main() {
     float area = map_texel_area(in_hit.xyz, in_normal.xyz, ndc, u_size);
     v_value = in_flux.rgb / (norm * area);
     v_center = c + vec2(float(u_map_slot[face] * u_size), 0.0);  // atlas pixels
-    gl_PointSize = 2.0 * ceil(u_cut * u_sigma) + 2.0;
+    // The sprite covers the pixel centres within ceil(cut * sigma) of c (a square of
+    // half-width ceil(cut * sigma) + 0.5): every texel the cut-off disc reaches.
+    gl_PointSize = 2.0 * ceil(u_cut * u_sigma) + 1.0;
     gl_Position = vec4(ndc, 0.0, 1.0);
 }
 #elif defined FRAGMENT_SHADER

@@ -10,7 +10,7 @@ from __future__ import annotations
 import moderngl
 
 from renderers.caustics_mapping.caustic_trace import Trace
-from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
 
@@ -28,8 +28,9 @@ def splat_caustic_map(
     ctx: moderngl.Context, light: LightSetup, traces: list[Trace], target: moderngl.Texture,
     *, size: int, faces: tuple[int, ...], sigma: float, cut: float,
 ) -> None:
-    """Accumulate every trace's splats into ``target`` (cleared first)."""
-    fbo = ctx.framebuffer([target])
+    """Accumulate every trace's splats into ``target`` (cleared first; a texture of
+    the context's pool)."""
+    fbo = pool(ctx).framebuffer([target])
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0)
     program = load_program(ctx, "caustic_splat.glsl")
@@ -52,4 +53,3 @@ def splat_caustic_map(
     ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
     for vao in vaos:
         vao.release()
-    release_framebuffer(ctx, fbo)

@@ -1,8 +1,10 @@
-// Pass 3a: the vertex grid (paper Section 3.3). One vertex per object-atlas texel
-// (gl_VertexID -> view, texel). Each covered texel refracts or reflects the light,
-// estimates where the ray meets the receivers from the receiver positions atlas,
-// and writes one record; nothing is rasterised (the splat passes draw the records
-// as point sprites).
+// Pass 3a: the vertex grid (paper Section 3.3). One invocation per object-atlas
+// texel (invocation index -> view, texel). Each covered texel refracts or reflects
+// the light, estimates where the ray meets the receivers from the receiver
+// positions atlas, and writes one record; nothing is rasterised (the splat passes
+// draw the records as point sprites). Run as a compute shader (COMPUTE_SHADER,
+// u_count invocations: llvmpipe spreads compute work over its threads, vertex
+// shading runs on one) or, identically, as a vertex shader over u_count points.
 //
 // Records (std430, binding 0), five vec4 per grid vertex:
 //   0: xyz ray origin v (m), w object view index
@@ -60,7 +62,12 @@ uniform int u_exit_iterations;  // refinements of the exit point (double refract
 
 const int STATUS_NO_EXIT = 5;   // double refraction found no exit surface
 
-#if defined VERTEX_SHADER
+#if defined COMPUTE_SHADER
+layout(local_size_x = 64) in;
+uniform int u_count;            // grid vertices (invocations past it do nothing)
+#endif
+
+#if defined VERTEX_SHADER || defined COMPUTE_SHADER
 
 // T(x): the receiver seen from the light through x; false when there is none.
 bool receiver_at(vec3 x, out vec4 t, out ivec2 texel) {
@@ -171,9 +178,14 @@ void write_record(int base, vec3 v, float view, vec3 r, float d, vec3 p, int sta
 }
 
 void main() {
+#if defined COMPUTE_SHADER
+    int id = int(gl_GlobalInvocationID.x);
+    if (id >= u_count) return;
+#else
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);    // clipped: this pass rasterises nothing
     gl_PointSize = 1.0;
     int id = gl_VertexID;
+#endif
     int per_view = u_grid * u_grid;
     int view = id / per_view;
     int local = id - view * per_view;

@@ -1,10 +1,11 @@
 """Pass 3a: refract or reflect at every grid vertex and estimate the receiver hit.
 
-Runs ``caustic_trace.glsl`` as a vertex shader over the ``grid`` x ``grid`` vertices
-of every object view, writing one record per vertex into a shader storage buffer
-(layout in the shader's header) and the estimate after every iteration into a
-second. The splat passes draw the record buffer as point sprites; the renderer reads
-both back for ``hits.npz`` and for the NumPy mirror in :mod:`.estimators`.
+Runs ``caustic_trace.glsl`` as a compute shader over the ``grid`` x ``grid`` vertices
+of every object view (one invocation each), writing one record per vertex into a
+shader storage buffer (layout in the shader's header) and the estimate after every
+iteration into a second. The splat passes draw the record buffer as point sprites;
+the renderer reads both back for ``hits.npz`` and for the NumPy mirror in
+:mod:`.estimators`.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import moderngl
 import numpy as np
 
 from harness.scene.model import ConductorMaterial, DielectricMaterial
-from renderers.caustics_mapping.context import load_program
+from renderers.caustics_mapping.context import ResourcePool, load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.object_positions import ObjectSurfaces
 from renderers.caustics_mapping.receiver_positions import ReceiverPositions
@@ -112,9 +113,10 @@ class Trace:
             "normal": rec[:, 4, :3].copy(), "history": hist.copy(),
         }
 
-    def release(self) -> None:
-        self.records.release()
-        self.history.release()
+    def give_back(self, resources: ResourcePool) -> None:
+        """Return the buffers to the context's pool."""
+        resources.give_back(self.records)
+        resources.give_back(self.history)
 
 
 def run_caustic_trace(
@@ -136,9 +138,10 @@ def run_caustic_trace(
         Refinements of the image-space exit point (double refraction).
     """
     count = len(light.object_views) * grid * grid
-    records = ctx.buffer(reserve=count * RECORD_FLOATS * 4)
-    history = ctx.buffer(reserve=count * (iterations + 1) * 4)
-    program = load_program(ctx, "caustic_trace.glsl")
+    resources = pool(ctx)
+    records = resources.buffer(count * RECORD_FLOATS * 4)        # every record is written
+    history = resources.buffer(count * (iterations + 1) * 4)     # every entry is written
+    program = load_program(ctx, "caustic_trace.glsl", compute=True)
     set_light_uniforms(program, light)
     set_object_view_uniforms(program, light)
     units = {"u_receiver_positions": positions.positions, "u_receiver_normals": positions.normals,
@@ -164,10 +167,9 @@ def run_caustic_trace(
     set_uniform(program, "u_iterations", iterations)
     set_uniform(program, "u_eps", float(eps))
     set_uniform(program, "u_exit_iterations", exit_iterations)
+    set_uniform(program, "u_count", count)
     records.bind_to_storage_buffer(0)
     history.bind_to_storage_buffer(1)
-    vao = ctx.vertex_array(program, [])
-    vao.render(moderngl.POINTS, vertices=count)
+    program.run((count + 63) // 64)
     ctx.memory_barrier()
-    vao.release()
     return Trace(records, history, count, iterations)

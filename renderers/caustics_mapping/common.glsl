@@ -80,15 +80,27 @@ bool project(mat4 vp, vec3 x, out vec2 ndc) {
     return abs(ndc.x) <= 1.0 && abs(ndc.y) <= 1.0;
 }
 
+// The atlas texel of NDC `ndc` in view `face` of a map with `size` texels per side.
+ivec2 map_texel(int face, vec2 ndc, int size) {
+    ivec2 t = min(ivec2(floor((ndc * 0.5 + 0.5) * float(size))), ivec2(size - 1));
+    return ivec2(max(u_map_slot[face], 0) * size + t.x, t.y);
+}
+
+// Locates x in the map views: its face and NDC; false when x is outside every view
+// (or in a view that is not stored). map_locate's first half, for callers that
+// look x up in several maps (one projection, then map_texel per map size).
+bool map_project(vec3 x, out int face, out vec2 ndc) {
+    face = u_map_cube == 1 ? cube_face(x - u_light_pos) : 0;
+    bool inside = project(u_map_vp[face], x, ndc);
+    return inside && u_map_slot[face] >= 0;
+}
+
 // Locates x in the map views: its face, NDC, and the atlas texel of a map with
 // `size` texels per face side. False when x is outside every view.
 bool map_locate(vec3 x, int size, out int face, out vec2 ndc, out ivec2 texel) {
-    face = u_map_cube == 1 ? cube_face(x - u_light_pos) : 0;
-    bool inside = project(u_map_vp[face], x, ndc);
-    ivec2 t = min(ivec2(floor((ndc * 0.5 + 0.5) * float(size))), ivec2(size - 1));
-    int slot = u_map_slot[face];
-    texel = ivec2(max(slot, 0) * size + t.x, t.y);
-    return inside && slot >= 0;
+    bool found = map_project(x, face, ndc);
+    texel = map_texel(face, ndc, size);
+    return found;
 }
 
 // Solid angle (sr, perspective) or area perpendicular to the light (m^2,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import moderngl
 
-from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.uniforms import set_uniform
 
 __all__ = ["lowpass_filter"]
@@ -13,10 +13,11 @@ __all__ = ["lowpass_filter"]
 def lowpass_filter(
     ctx: moderngl.Context, source: moderngl.Texture, *, size: int
 ) -> moderngl.Texture:
-    """A 3x3 binomial blur of the caustic-map atlas ``source`` (RGBA32F), per face."""
-    target = ctx.texture(source.size, 4, dtype="f4")
-    target.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    fbo = ctx.framebuffer([target])
+    """A 3x3 binomial blur of the caustic-map atlas ``source`` (RGBA32F), per face
+    (every texel is written; a texture of the context's pool)."""
+    resources = pool(ctx)
+    target = resources.texture(source.size)
+    fbo = resources.framebuffer([target])
     fbo.use()
     program = load_program(ctx, "lowpass.glsl")
     source.use(location=0)
@@ -26,5 +27,4 @@ def lowpass_filter(
     vao = ctx.vertex_array(program, [])
     vao.render(moderngl.TRIANGLES, vertices=3)
     vao.release()
-    release_framebuffer(ctx, fbo)
     return target

@@ -9,15 +9,17 @@ import numpy as np
 
 from harness.geometry import TriangleMesh
 
-__all__ = ["GpuMesh", "upload_mesh"]
+__all__ = ["GpuMesh", "back_faces_hidden", "upload_mesh"]
 
 
 @dataclass(frozen=True, eq=False)
 class GpuMesh:
-    """A mesh on the GPU: interleaved ``3f position (m), 3f normal, 2f (u, v)``."""
+    """A mesh on the GPU: interleaved ``3f position (m), 3f normal, 2f (u, v)``;
+    ``source`` the mesh it was uploaded from."""
 
     vbo: moderngl.Buffer
     ibo: moderngl.Buffer
+    source: TriangleMesh | None = None
 
     def vertex_array(self, program: moderngl.Program) -> moderngl.VertexArray:
         """A VAO binding the attributes ``program`` uses (others are skipped)."""
@@ -40,8 +42,30 @@ class GpuMesh:
         self.ibo.release()
 
 
+def back_faces_hidden(mesh: TriangleMesh, view_proj: np.ndarray) -> bool:
+    """Whether no back face of ``mesh`` can be the nearest surface in view ``view_proj``
+    (world -> clip; row-major, column vectors): the mesh is closed (outward normals,
+    counter-clockwise faces) and lies wholly in front of the near plane, so the eye
+    is outside it. Every ray from the eye that meets the mesh then enters it through
+    a front face first, so with the depth test culling back faces (half the
+    triangles to set up, rasterise and shade) leaves the image as it was, except
+    where a back face ties the front face in depth at a silhouette (the depth test
+    keeps the first drawn). Used by the shadow map only, where such a texel's
+    distance differs by rounding and the biased visibility test does not flip (no
+    output of any committed scene changed); the object-positions and camera passes
+    do not cull, as it changed a grid record (high_ior_tir) and 1-3 camera pixels.
+    """
+    if not mesh.closed:
+        return False
+    p = mesh.positions.astype(np.float64)
+    clip = p @ view_proj[:3, :3].T + view_proj[:3, 3]
+    w = p @ view_proj[3, :3] + view_proj[3, 3]
+    return bool(np.all(clip[:, 2] + w > 1e-6 * np.abs(w) + 1e-300))
+
+
 def upload_mesh(ctx: moderngl.Context, mesh: TriangleMesh) -> GpuMesh:
     """Upload ``mesh``; a mesh without (u, v) gets zeros."""
     uvs = mesh.uvs if mesh.uvs is not None else np.zeros((len(mesh.positions), 2), np.float32)
     data = np.hstack([mesh.positions, mesh.normals, uvs]).astype(np.float32)
-    return GpuMesh(ctx.buffer(data.tobytes()), ctx.buffer(mesh.faces.astype(np.uint32).tobytes()))
+    return GpuMesh(ctx.buffer(data.tobytes()), ctx.buffer(mesh.faces.astype(np.uint32).tobytes()),
+                   mesh)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import moderngl
 
-from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.context import ResourcePool, load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.meshes import GpuMesh
 from renderers.caustics_mapping.uniforms import set_light_uniforms
@@ -37,9 +37,10 @@ class ObjectSurfaces:
     normals: moderngl.Texture
     covered: int
 
-    def release(self) -> None:
-        self.positions.release()
-        self.normals.release()
+    def give_back(self, resources: ResourcePool) -> None:
+        """Return the textures to the context's pool."""
+        resources.give_back(self.positions)
+        resources.give_back(self.normals)
 
 
 def render_object_surfaces(
@@ -58,11 +59,10 @@ def render_object_surfaces(
         fragments later hidden by nearer ones (overdraw) are not counted.
     """
     views = light.object_views
-    textures = [ctx.texture((len(views) * grid, grid), 4, dtype="f4") for _ in range(2)]
-    for tex in textures:
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    depth = ctx.depth_texture((len(views) * grid, grid))
-    fbo = ctx.framebuffer(textures, depth)
+    resources = pool(ctx)
+    textures = [resources.texture((len(views) * grid, grid)) for _ in range(2)]
+    depth = resources.depth_texture((len(views) * grid, grid))
+    fbo = resources.framebuffer(textures, depth)
     program = load_program(
         ctx, "object_positions.glsl", defines={"BACK_FACES": 1} if back else None
     )
@@ -72,6 +72,10 @@ def render_object_surfaces(
     ctx.enable(moderngl.DEPTH_TEST)
     ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
     indices = range(len(objects)) if which is None else which
+    # No back-face culling here (unlike the shadow map and camera passes): at a
+    # silhouette a back face can tie the front face in depth at a grid texel, and the
+    # depth test then keeps the first drawn; culling changed one grid record of
+    # scenes/hard/high_ior_tir at its default settings (a cube edge).
     vaos = {i: objects[i].vertex_array(program) for i in indices}
 
     def draw() -> None:
@@ -93,6 +97,5 @@ def render_object_surfaces(
         covered = int(query.samples)
     for vao in vaos.values():
         vao.release()
-    release_framebuffer(ctx, fbo)
-    depth.release()
+    resources.give_back(depth)
     return ObjectSurfaces(*textures, covered=covered)

@@ -1,8 +1,8 @@
 // Receiver positions from the light (paper Section 3.2, first pass).
-// Three RGBA32F attachments per map-atlas texel:
+// Three attachments per map-atlas texel (RGBA32F, RGBA32F, RG32F):
 //   0: xyz world position (m), w = receiver index + 1 (0: no receiver);
 //   1: xyz unit receiver normal, w = 0;
-//   2: xy receiver (u, v) (receiver units), zw = 0.
+//   2: xy receiver (u, v) (receiver units).
 #include "common.glsl"
 
 uniform mat4 u_vp;        // world -> clip of the face being rendered

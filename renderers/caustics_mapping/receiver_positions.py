@@ -1,8 +1,9 @@
 """Pass 1: receiver positions, normals and (u, v) from the light (paper Section 3.2).
 
-Output: three RGBA32F map atlases of ``settings.positions_map`` texels per face side
-(layout in ``common.glsl``), attachment 0 ``xyz`` world position (m), ``w`` receiver
-index + 1 (0 = none); attachment 1 the receiver normal; attachment 2 its (u, v).
+Output: three map atlases of ``settings.positions_map`` texels per face side (layout
+in ``common.glsl``), attachment 0 (RGBA32F) ``xyz`` world position (m), ``w`` receiver
+index + 1 (0 = none); attachment 1 (RGBA32F) the receiver normal; attachment 2
+(RG32F) its (u, v).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.context import ResourcePool, load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.meshes import GpuMesh
 from renderers.caustics_mapping.uniforms import set_light_uniforms
@@ -22,7 +23,7 @@ __all__ = ["ReceiverPositions", "render_receiver_positions"]
 
 @dataclass(eq=False)
 class ReceiverPositions:
-    """The receiver positions atlas and its companions (all RGBA32F)."""
+    """The receiver positions atlas and its companions (RGBA32F; ``uvs`` RG32F)."""
 
     positions: moderngl.Texture
     normals: moderngl.Texture
@@ -35,9 +36,10 @@ class ReceiverPositions:
         data = np.frombuffer(self.positions.read(), np.float32)
         return data.reshape(self.size, -1, 4)
 
-    def release(self) -> None:
+    def give_back(self, resources: ResourcePool) -> None:
+        """Return the textures to the context's pool."""
         for tex in (self.positions, self.normals, self.uvs):
-            tex.release()
+            resources.give_back(tex)
 
 
 def render_receiver_positions(
@@ -47,11 +49,10 @@ def render_receiver_positions(
     """Render every receiver into the map views ``light.map_faces``, one atlas slot
     each (``faces`` must equal them). Cube faces not stored report "no receiver"."""
     width = len(light.map_faces) * size
-    textures = [ctx.texture((width, size), 4, dtype="f4") for _ in range(3)]
-    for tex in textures:
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    depth = ctx.depth_texture((width, size))
-    fbo = ctx.framebuffer(textures, depth)
+    resources = pool(ctx)
+    textures = [resources.texture((width, size), components) for components in (4, 4, 2)]
+    depth = resources.depth_texture((width, size))
+    fbo = resources.framebuffer(textures, depth)
     program = load_program(ctx, "receiver_positions.glsl")
     set_light_uniforms(program, light)
     fbo.use()
@@ -67,6 +68,5 @@ def render_receiver_positions(
             vao.render(moderngl.TRIANGLES)
     for vao in vaos:
         vao.release()
-    release_framebuffer(ctx, fbo)
-    depth.release()
+    resources.give_back(depth)
     return ReceiverPositions(*textures, size=size, faces=faces)

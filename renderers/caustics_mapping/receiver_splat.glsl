@@ -75,7 +75,8 @@ void main() {
     v_value = in_flux.rgb / (norm * texel_area * jacobian);
     v_center = c;
     v_sigma = sigma;
-    gl_PointSize = 2.0 * ceil(u_cut * max(sigma.x, sigma.y)) + 2.0;
+    // Pixel centres within ceil(cut * sigma) of c: every texel the cut-off reaches.
+    gl_PointSize = 2.0 * ceil(u_cut * max(sigma.x, sigma.y)) + 1.0;
     gl_Position = vec4(c / size * 2.0 - 1.0, 0.0, 1.0);
 }
 #elif defined FRAGMENT_SHADER

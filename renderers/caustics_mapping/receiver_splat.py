@@ -17,7 +17,7 @@ import numpy as np
 from harness.geometry import ReceiverGeometry
 from renderers.caustics_mapping.caustic_splat import record_vertex_array
 from renderers.caustics_mapping.caustic_trace import Trace
-from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.receiver_positions import ReceiverPositions
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
@@ -69,8 +69,9 @@ def splat_receiver_map(
     *, index: int, receiver: ReceiverGeometry, mapping: UvMapping,
     positions: ReceiverPositions, caustic_size: int, sigma: float, cut: float,
 ) -> None:
-    """Accumulate the splats that landed on receiver ``index`` into ``target``."""
-    fbo = ctx.framebuffer([target])
+    """Accumulate the splats that landed on receiver ``index`` into ``target``
+    (cleared first; a texture of the context's pool)."""
+    fbo = pool(ctx).framebuffer([target])
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0)
     program = load_program(ctx, "receiver_splat.glsl")
@@ -98,4 +99,3 @@ def splat_receiver_map(
         vao.render(moderngl.POINTS, vertices=trace.count)
         vao.release()
     ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
-    release_framebuffer(ctx, fbo)

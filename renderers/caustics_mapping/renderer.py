@@ -24,7 +24,7 @@ from renderers.caustics_mapping.caustic_trace import (
     material_table,
     run_caustic_trace,
 )
-from renderers.caustics_mapping.context import GLError, PassTimer, create_context
+from renderers.caustics_mapping.context import GLError, PassTimer, create_context, pool
 from renderers.caustics_mapping.estimators import MapLookup
 from renderers.caustics_mapping.lights import CUBE_FACES, LightSetup, light_setups
 from renderers.caustics_mapping.lowpass import lowpass_filter
@@ -144,29 +144,41 @@ def render_frame(
     GLError
         A pass left a GL error.
     """
+    return _frame(scene, ctx, geometry, want_lookups=lookups, want_atlas=True)
+
+
+def render(scene: Scene, *, ctx: moderngl.Context | None = None,
+           geometry: SceneGeometry | None = None) -> RenderResult:
+    """Render ``scene``; the :class:`RenderResult` of :func:`render_frame` (without
+    reading back what only the :class:`Frame` holds: the caustic-map atlas and the
+    positions atlases)."""
+    return _frame(scene, ctx, geometry, want_lookups=False, want_atlas=False).result
+
+
+def _frame(scene: Scene, ctx: moderngl.Context | None, geometry: SceneGeometry | None, *,
+           want_lookups: bool, want_atlas: bool) -> Frame:
     own = ctx is None
     ctx = ctx or create_context()
     try:
         # Make ``ctx`` current: another standalone context created (or released)
         # since would otherwise receive these GL calls.
         with ctx:
-            return _render(scene, ctx, geometry or build_geometry(scene), lookups)
+            try:
+                return _render(scene, ctx, geometry or build_geometry(scene), want_lookups,
+                               want_atlas)
+            finally:
+                pool(ctx).end_frame()
     finally:
         if own:
             ctx.release()
 
 
-def render(scene: Scene, *, ctx: moderngl.Context | None = None,
-           geometry: SceneGeometry | None = None) -> RenderResult:
-    """Render ``scene``; the :class:`RenderResult` of :func:`render_frame`."""
-    return render_frame(scene, ctx=ctx, geometry=geometry, lookups=False).result
-
-
 def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
-            want_lookups: bool) -> Frame:
+            want_lookups: bool, want_atlas: bool) -> Frame:
     s = scene.settings
     effects = effects_of(scene)
     timer = PassTimer(ctx)
+    resources = pool(ctx)
     passes: list[str] = []
 
     def ran(name: str) -> None:
@@ -235,8 +247,7 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
                 ran(name)
                 traces.append(trace)
         csize = s.caustic_map
-        caustic = ctx.texture((len(faces) * csize, csize), 4, dtype="f4")
-        caustic.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        caustic = resources.texture((len(faces) * csize, csize))
         with timer.measure("caustic_map"):
             splat_caustic_map(ctx, light, traces, caustic, size=csize, faces=faces,
                               sigma=s.splat_sigma, cut=s.splat_radius)
@@ -244,17 +255,17 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
         if s.lowpass:
             with timer.measure("lowpass"):
                 filtered = lowpass_filter(ctx, caustic, size=csize)
-            caustic.release()
+            resources.give_back(caustic)
             caustic = filtered
             ran("lowpass")
         with timer.measure("receiver_map"):
             for index, rec in enumerate(geometry.receivers):
-                target = ctx.texture(s.receiver_map, 4, dtype="f4")
+                target = resources.texture(s.receiver_map)
                 splat_receiver_map(ctx, light, traces, target, index=index, receiver=rec,
                                    mapping=mappings[index], positions=positions,
                                    caustic_size=csize, sigma=s.splat_sigma, cut=s.splat_radius)
                 maps[index] += _read_rgba(target)[:, :, :3]
-                target.release()
+                resources.give_back(target)
         ran("receiver_map")
         shadow = None
         if "shadows" in effects:
@@ -268,17 +279,21 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
             camera += render_camera(ctx, light, camera=scene.camera, geometry=geometry,
                                     receivers=receivers, objects=objects, inputs=inputs)
         ran("camera")
-        atlas = _read_rgba(caustic)[:, :, :3]
-        caustic_total = atlas.copy() if caustic_total is None else caustic_total + atlas
+        if want_atlas:
+            atlas = _read_rgba(caustic)[:, :, :3]
+            caustic_total = atlas.copy() if caustic_total is None else caustic_total + atlas
         for channel, trace in zip(channels, traces, strict=False):
             data = trace.read()
             data["channel"] = np.full(trace.count, channel, np.int32)
             data["light"] = np.full(trace.count, light_index, np.int32)
             hits.append(data)
-            trace.release()
-        for resource in (caustic, shadow, front, back, positions):
+            trace.give_back(resources)
+        for resource in (front, back, positions):
             if resource is not None:
-                resource.release()
+                resource.give_back(resources)
+        for texture in (caustic, shadow):
+            if texture is not None:
+                resources.give_back(texture)
     error = ctx.error
     for mesh in receivers + objects:
         mesh.release()

@@ -1,5 +1,5 @@
 // Shadow map (paper Section 3.2, optional fourth pass): the caustic objects' light
-// distance per map-atlas texel. RGBA32F: r = distance from the light along the ray
+// distance per map-atlas texel. RG32F: r = distance from the light along the ray
 // (m; for a directional light the signed distance dot(x, direction)), g = 1 where
 // an object was seen (0: nothing, fully lit).
 #include "common.glsl"

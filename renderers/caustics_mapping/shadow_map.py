@@ -1,6 +1,6 @@
 """Pass 4: shadow map of the caustic objects from the light (paper Section 3.2).
 
-Runs only with the ``shadows`` effect. Output: an RGBA32F map atlas of
+Runs only with the ``shadows`` effect. Output: an RG32F map atlas of
 ``settings.shadow_map`` texels per face (layout in ``shadow_map.glsl``).
 """
 
@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import moderngl
 
-from renderers.caustics_mapping.context import load_program, release_framebuffer
+from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
-from renderers.caustics_mapping.meshes import GpuMesh
+from renderers.caustics_mapping.meshes import GpuMesh, back_faces_hidden
 from renderers.caustics_mapping.uniforms import set_light_uniforms
 
 __all__ = ["render_shadow_map"]
@@ -20,12 +20,13 @@ def render_shadow_map(
     ctx: moderngl.Context, light: LightSetup, objects: list[GpuMesh], *, size: int,
     faces: tuple[int, ...],
 ) -> moderngl.Texture:
-    """Nearest caustic-object distance per texel of the map views in ``faces``."""
+    """Nearest caustic-object distance per texel of the map views in ``faces``
+    (a texture of the context's pool: give it back, do not release it)."""
     views = len(light.map_faces)
-    target = ctx.texture((views * size, size), 4, dtype="f4")
-    target.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    depth = ctx.depth_texture((views * size, size))
-    fbo = ctx.framebuffer([target], depth)
+    resources = pool(ctx)
+    target = resources.texture((views * size, size), 2)      # r, g: all the camera reads
+    depth = resources.depth_texture((views * size, size))
+    fbo = resources.framebuffer([target], depth)
     program = load_program(ctx, "shadow_map.glsl")
     set_light_uniforms(program, light)
     fbo.use()
@@ -35,11 +36,16 @@ def render_shadow_map(
     vaos = [mesh.vertex_array(program) for mesh in objects]
     for slot, face in enumerate(light.map_faces):
         fbo.viewport = (slot * size, 0, size, size)
-        program["u_vp"].write(light.map_views[face].view_proj.T.astype("f4").tobytes())
-        for vao in vaos:
+        view_proj = light.map_views[face].view_proj
+        program["u_vp"].write(view_proj.T.astype("f4").tobytes())
+        for mesh, vao in zip(objects, vaos, strict=True):
+            cull = mesh.source is not None and back_faces_hidden(mesh.source, view_proj)
+            if cull:
+                ctx.enable(moderngl.CULL_FACE)
             vao.render(moderngl.TRIANGLES)
+            if cull:
+                ctx.disable(moderngl.CULL_FACE)
     for vao in vaos:
         vao.release()
-    release_framebuffer(ctx, fbo)
-    depth.release()
+    resources.give_back(depth)
     return target
