@@ -386,6 +386,14 @@ class Settings:
     line (``--set name=value``)."""
 
     section: ClassVar[str] = "`[settings]`"
+
+    @property
+    def splat_sigma_texels(self) -> float:
+        """The splat's standard deviation in caustic-map texels (``splat_sigma`` or
+        its grid-relative default)."""
+        if self.splat_sigma is not None:
+            return float(self.splat_sigma)
+        return 0.5 * self.caustic_map / self.grid
     # caustics mapping
     grid: int = spec(128, doc="Refractive vertex grid resolution (grid × grid).", ge=2, le=4096)
     caustic_map: int = spec(512, doc="Caustic-map resolution per face.", unit="px", ge=8, le=8192)
@@ -405,8 +413,12 @@ class Settings:
         doc="Finite-difference step of the Newton estimator; default 1e-3 of the "
         "light-to-receiver distance.", unit="m", gt=0,
     )
-    splat_sigma: float = spec(
-        1.0, doc="Standard deviation of the Gaussian splat.", unit="caustic-map texels", gt=0
+    splat_sigma: float | None = spec(
+        None,
+        doc="Standard deviation of the Gaussian splat. Default: half the grid spacing, "
+        "0.5 x caustic_map / grid texels, so neighbouring splats blend into a continuous "
+        "caustic (a fixed 1 texel left the grid visible: receiver relMSE 0.57 vs 0.075 "
+        "on water_pool at 128/512).", unit="caustic-map texels", gt=0,
     )
     splat_radius: float = spec(
         3.0, doc="Splat cut-off radius, in standard deviations.", gt=0, le=8

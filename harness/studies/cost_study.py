@@ -32,7 +32,7 @@ def sweep_configs(*, quick: bool) -> list[dict]:
     iterations = (0, 1, 3) if quick else (0, 1, 2, 3, 5, 8)
     grids = (32, 64, 128) if quick else (32, 64, 128, 256)
     maps = (256, 512) if quick else (256, 512, 1024)
-    sigmas = (0.5, 1.0, 2.0)
+    sigmas = (1.0, 2.0, 3.0)
     configs = [{"estimator": e, "iterations": k}
                for e in ("modified", "newton", "secant") for k in iterations]
     configs += [{"grid": g} for g in grids]
@@ -67,13 +67,13 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
     base_error = score_value("relmse", base_frame.result.receivers[0].irradiance, reference,
                              mask=caustic, exposure=None)
     rows.append(("caustics_mapping", "scene settings", s.estimator, s.iterations, s.grid,
-                 s.caustic_map, s.splat_sigma, base_time, base_error))
+                 s.caustic_map, s.splat_sigma_texels, base_time, base_error))
     for config in sweep_configs(quick=quick):
         frame, seconds = runner.timed(clock=caustic_seconds, **config)
         error = score_value("relmse", frame.result.receivers[0].irradiance, reference,
                             mask=caustic, exposure=None)
         merged = {"estimator": s.estimator, "iterations": s.iterations, "grid": s.grid,
-                  "caustic_map": s.caustic_map, "splat_sigma": s.splat_sigma, **config}
+                  "caustic_map": s.caustic_map, "splat_sigma": s.splat_sigma_texels, **config}
         rows.append(("caustics_mapping", _label(config), merged["estimator"],
                      merged["iterations"], merged["grid"], merged["caustic_map"],
                      merged["splat_sigma"], seconds, error))
