@@ -263,7 +263,8 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
                 target = resources.texture(s.receiver_map)
                 splat_receiver_map(ctx, light, traces, target, index=index, receiver=rec,
                                    mapping=mappings[index], positions=positions,
-                                   caustic_size=csize, sigma=s.splat_sigma_texels, cut=s.splat_radius)
+                                   caustic_size=csize, sigma=s.splat_sigma_texels,
+                                   cut=s.splat_radius)
                 maps[index] += _read_rgba(target)[:, :, :3]
                 resources.give_back(target)
         ran("receiver_map")
