@@ -4,13 +4,21 @@ the session, and a ``ctx`` fixture asserting GL_NO_ERROR before and after a test
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
+from hypothesis import settings as hypothesis_settings
 
 from renderers.caustics_mapping import create_context
 
 REPO = Path(__file__).resolve().parents[1]
+
+# On CI, property-based tests draw the same examples every run (reproducible
+# verdicts); locally they explore new ones each time.
+hypothesis_settings.register_profile("ci", derandomize=True, print_blob=True)
+if os.environ.get("CI"):
+    hypothesis_settings.load_profile("ci")
 SCENES = REPO / "scenes"
 
 MINIMAL_SCENE = """
