@@ -67,6 +67,7 @@ def _compare(args: argparse.Namespace) -> int:
     from harness.scene_commands import load_scenes  # noqa: PLC0415
     from harness.thresholds import load_thresholds  # noqa: PLC0415
     from reports import build_report, scene_folder  # noqa: PLC0415
+    from reports.plots import write_pdfs  # noqa: PLC0415
 
     start = time.perf_counter()
     overrides = dict(parse_override(item) for item in args.set or [])
@@ -98,6 +99,7 @@ def _compare(args: argparse.Namespace) -> int:
         folder = scene_folder(scene.name, taken=taken)
         taken.append(folder)
         write_comparison(out_dir / folder, comparison)
+        write_pdfs(out_dir / folder, comparison)
         comparisons.append(comparison)
     build_report(out_dir, comparisons, self_contained=args.self_contained)
     _print_summary(comparisons, out_dir, time.perf_counter() - start)

@@ -167,3 +167,24 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=6)
     return figure
+
+
+def write_pdfs(folder, comparison) -> list[str]:
+    """``convergence.pdf`` and ``cost_accuracy.pdf`` (for papers) beside the report's
+    SVGs, when the comparison has those tables; returns the names written."""
+    from pathlib import Path  # noqa: PLC0415
+
+    from harness.exr import atomic_write_bytes  # noqa: PLC0415
+
+    folder = Path(folder)
+    written = []
+    if comparison.convergence is not None and comparison.convergence.rows:
+        atomic_write_bytes(folder / "convergence.pdf", figure_bytes(
+            convergence_figure(comparison.convergence), fmt="pdf"))
+        written.append("convergence.pdf")
+    if comparison.cost is not None and comparison.cost.rows:
+        atomic_write_bytes(folder / "cost_accuracy.pdf", figure_bytes(cost_figure(
+            comparison.cost, speedup=comparison.speedup, point=comparison.speedup_point),
+            fmt="pdf"))
+        written.append("cost_accuracy.pdf")
+    return written

@@ -49,6 +49,8 @@ def test_compare_writes_everything_and_reuses_the_cache(tmp_path, capsys):
     assert data["provenance"]["reference"]["event_chains"]
     for name in data["files"].values():
         assert (folder / name).is_file(), name
+    for name in ("convergence.pdf", "cost_accuracy.pdf"):
+        assert (folder / name).read_bytes().startswith(b"%PDF"), name
     with (folder / "convergence.csv").open() as f:
         rows = list(csv.DictReader(f))
     keys = {(r["estimator"], r["safeguarded"], int(r["iteration"])) for r in rows}
