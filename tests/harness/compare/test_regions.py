@@ -33,3 +33,18 @@ def test_object_mask_covers_the_sphere():
     _, cols = np.nonzero(mask)
     assert abs(cols.mean() - 31.5) < 1.0  # centred horizontally (sphere on the axis plane)
     assert object_mask(camera, build_geometry(scene), dilate=1).sum() > mask.sum()
+
+
+def test_blind_reference_camera_is_detected():
+    """A reference camera that is black on most pixels the real-time image lights is
+    'blind' (ptracer under water), even with a few stray non-zero pixels; a noisy but
+    covering reference is not."""
+    from harness.compare.pipeline import _camera_is_blind
+
+    rng = np.random.default_rng(3)
+    test = np.ones((32, 32, 3))
+    stray = np.zeros((32, 32, 3))
+    stray[0, :5] = 50.0
+    noisy = rng.poisson(4.0, (32, 32, 1)).repeat(3, axis=2).astype(float)
+    assert _camera_is_blind(stray, test)
+    assert not _camera_is_blind(noisy, test)
