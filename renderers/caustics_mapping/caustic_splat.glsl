@@ -45,10 +45,8 @@ flat in vec3 v_value;
 flat in vec2 v_center;
 out vec4 out_irradiance;
 void main() {
-    vec2 q = (gl_FragCoord.xy - v_center) / u_sigma;
-    float e = dot(q, q);
-    if (e > u_cut * u_cut) discard;
-    float w = exp(-0.5 * e);
+    float w = splat_weight(gl_FragCoord.xy, v_center, vec2(u_sigma), u_cut);
+    if (w < 0.0) discard;
     out_irradiance = vec4(v_value * w, w);
 }
 #endif

@@ -157,3 +157,12 @@ float splat_norm(vec2 c, vec2 sigma, float cut, vec2 lo, vec2 hi) {
     }
     return total;
 }
+
+// Weight of a Gaussian splat at a fragment: exp(-|q|^2 / 2) with q = (fragment -
+// centre) / sigma (pixels; sigma per axis), or -1 beyond the cut-off radius (in
+// sigmas), where the caller discards the fragment.
+float splat_weight(vec2 fragment, vec2 centre, vec2 sigma, float cut) {
+    vec2 q = (fragment - centre) / sigma;
+    float e = dot(q, q);
+    return e > cut * cut ? -1.0 : exp(-0.5 * e);
+}

@@ -85,10 +85,8 @@ flat in vec2 v_center;
 flat in vec2 v_sigma;
 out vec4 out_irradiance;
 void main() {
-    vec2 q = (gl_FragCoord.xy - v_center) / v_sigma;
-    float e = dot(q, q);
-    if (e > u_cut * u_cut) discard;
-    float w = exp(-0.5 * e);
+    float w = splat_weight(gl_FragCoord.xy, v_center, v_sigma, u_cut);
+    if (w < 0.0) discard;
     out_irradiance = vec4(v_value * w, w);
 }
 #endif
