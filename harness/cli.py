@@ -1,53 +1,151 @@
-"""The ``caustics`` command line. Library code raises typed errors; only this module
-turns them into exit codes and one-line messages."""
+"""The ``caustics`` command line: every subcommand's arguments, and the dispatch.
+
+Library code raises typed errors; only this module turns them into exit codes and
+one-line messages. It imports nothing heavy: each subcommand names its handler as
+``"module:function"`` and the module is imported only when that subcommand runs, so
+``caustics --help`` and ``caustics validate`` never load Mitsuba, Dr.Jit, moderngl,
+matplotlib or playwright.
+"""
 
 from __future__ import annotations
 
 import argparse
 import importlib
 import sys
-from importlib import resources
-from pathlib import Path
 
-from harness.errors import HarnessError
-from harness.scene import SceneError
+from scenes import SceneError
+from scenes.errors import HarnessError
 
-__all__ = ["COMMAND_MODULES", "default_scene_path", "main"]
+__all__ = ["build_parser", "main"]
 
-#: Modules that each provide ``register(subparsers)``; one line per command group.
-COMMAND_MODULES = (
-    "harness.scene_commands",
-    "renderers.mitsuba.cli",
-    "renderers.caustics_mapping.cli",
-    "harness.compare_commands",
-    "harness.figures_commands",
-    "harness.accuracy_commands",
-)
+_SCENES_HELP = "scene files or bundled scene names (default: glass_sphere)"
 
 
-def default_scene_path() -> Path:
-    """The embedded default scene (a copy of ``scenes/glass_sphere.toml``)."""
-    return Path(str(resources.files("harness") / "default_scene.toml"))
+def _command(subparsers, name: str, handler: str, help_text: str) -> argparse.ArgumentParser:
+    parser = subparsers.add_parser(name, help=help_text)
+    parser.set_defaults(handler=handler)
+    return parser
+
+
+def _scene_commands(subparsers) -> None:
+    p = _command(subparsers, "validate", "harness.commands.scene:validate",
+                 "check scene files and print the effects each calls for")
+    p.add_argument("scenes", nargs="*", metavar="SCENE", help=_SCENES_HELP)
+    p.add_argument("--json", action="store_true", help="print a JSON report")
+    p = _command(subparsers, "describe", "harness.commands.scene:describe",
+                 "summarise scenes: geometry, effects, settings")
+    p.add_argument("scenes", nargs="*", metavar="SCENE", help=_SCENES_HELP)
+    _command(subparsers, "schema", "harness.commands.scene:schema",
+             "print the scene-file field reference (Markdown)")
+
+
+def _render_commands(subparsers) -> None:
+    p = _command(subparsers, "render", "harness.commands.render:render",
+                 "render a scene with caustics mapping (OpenGL): the method")
+    p.add_argument("scene", nargs="?", metavar="SCENE", help=_SCENES_HELP)
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--estimator", choices=("modified", "newton", "secant"))
+    p.add_argument("--safeguarded", action="store_true", help="safeguarded estimator")
+    p.add_argument("--iterations", type=int, metavar="N")
+    p.add_argument("--grid", type=int, metavar="G")
+    p.add_argument("--caustic-map", type=int, metavar="M", dest="caustic_map")
+    p.add_argument("--normalization", choices=("radiometric", "paper"))
+
+    p = _command(subparsers, "reference", "harness.commands.reference:reference",
+                 "render the Mitsuba ground truth (cached) into a directory")
+    p.add_argument("scene", nargs="?", metavar="SCENE", help=_SCENES_HELP)
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--photons", type=int, help="photon budget per seed")
+    p.add_argument("--spp", type=int, help="ptracer samples per pixel per seed")
+    p.add_argument("--seed", type=int, help="first random seed")
+    p.add_argument("--seeds", type=int, help="number of independent seeds K")
+    p.add_argument("--target-noise", type=float, help="stop at this relative noise")
+    p.add_argument("--cache-dir", help="cache root (default $CAUSTICS_CACHE_DIR or "
+                   "~/.cache/caustics-harness/reference)")
+    p.add_argument("--no-cache", action="store_true", help="render without the cache")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+def _compare_command(subparsers) -> None:
+    p = _command(subparsers, "compare", "harness.commands.compare:compare",
+                 "render both ways, compare, write data files and an HTML report")
+    p.add_argument("scenes", nargs="*", metavar="SCENE", help=_SCENES_HELP)
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--studies", metavar="LIST",
+                   help="comma-separated: metrics,convergence,cost (default: all)")
+    p.add_argument("--quick", action="store_true",
+                   help="smaller sweeps, one timing repeat, at most 4 iterations")
+    p.add_argument("--max-iterations", type=int, default=8, metavar="N",
+                   help="iterations 0..N in the convergence table (default 8)")
+    p.add_argument("--estimator", choices=("modified", "newton", "secant"))
+    p.add_argument("--iterations", type=int)
+    p.add_argument("--grid", type=int)
+    p.add_argument("--photons", type=int, help="reference photon budget per seed")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="override any setting (repeatable)")
+    p.add_argument("--thresholds", metavar="FILE",
+                   help="accuracy bounds (default: the bundled bounds); checked at the "
+                   "golden settings against the golden references, for bundled scenes only")
+    p.add_argument("--golden", metavar="DIR",
+                   help="golden references the bounds hold against (default: the bundled ones)")
+    p.add_argument("--fail-on-thresholds", action="store_true",
+                   help="exit 3 when a bound fails")
+    p.add_argument("--self-contained", action="store_true",
+                   help="embed images, plots, scripts in one HTML file per page")
+    p.add_argument("--cache-dir", help="reference cache root")
+    p.add_argument("--no-cache", action="store_true", help="render references without the cache")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+def _figures_command(subparsers) -> None:
+    p = _command(subparsers, "figures", "harness.commands.figures:figures",
+                 "regenerate the paper's figures with their data")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--only", metavar="LIST", help="comma-separated figure names (fig06,...)")
+    p.add_argument("--quick", action="store_true", help="small budgets and images")
+    p.add_argument("--scenes", metavar="DIR", help="scenes folder (default: the bundled scenes)")
+    p.add_argument("--cache-dir", help="reference cache root")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+def _check_commands(subparsers) -> None:
+    p = _command(subparsers, "golden", "harness.commands.checks:golden",
+                 "check (or --regenerate) the golden references")
+    p.add_argument("--dir", help="golden folder (default: the bundled one)")
+    p.add_argument("--regenerate", action="store_true",
+                   help="re-render into a staging folder and swap it in atomically")
+    p = _command(subparsers, "calibrate", "harness.commands.checks:calibrate",
+                 "set accuracy bounds from measured spread")
+    p.add_argument("--golden", help="golden folder (default: the bundled one)")
+    p.add_argument("--extra", type=int, default=3,
+                   help="independent references beyond the golden one (default 3)")
+    p.add_argument("-o", "--output", help="thresholds file (default: the bundled one)")
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand (imports no handler module)."""
     parser = argparse.ArgumentParser(
         prog="caustics",
         description="Ground-truth validation harness for real-time caustics "
         "(caustics mapping vs Mitsuba 3).",
     )
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name in COMMAND_MODULES:
-        importlib.import_module(name).register(subparsers)
+    for group in (_scene_commands, _render_commands, _compare_command, _figures_command,
+                  _check_commands):
+        group(subparsers)
     return parser
+
+
+def _handler(spec: str):
+    module, _, function = spec.partition(":")
+    return getattr(importlib.import_module(module), function)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; return the exit status (0 ok, 1 bad input or failure, 130 interrupted)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    args = build_parser().parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        return int(_handler(args.handler)(args) or 0)
     except SceneError as error:
         for problem in error.problems:
             print(f"error: {problem}", file=sys.stderr)

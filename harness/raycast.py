@@ -2,31 +2,22 @@
 
 The convergence tables compare each estimator's hit distance with the exact distance
 along the same ray (v, r) to the receivers; this module provides that exact distance
-from the very triangles both renderers were given (``harness.geometry``).
+from the very triangles both renderers were given (``scenes.geometry``).
 """
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
-from harness.geometry import SceneGeometry, TriangleMesh
-from harness.system import configure_drjit
+from renderers.mitsuba._mi import load
+from scenes.geometry import SceneGeometry, TriangleMesh
 
 __all__ = ["RayHits", "ReceiverTracer", "cast_rays"]
 
-VARIANT = "llvm_ad_rgb"
 
-
-@functools.lru_cache(maxsize=1)
 def _mitsuba():
-    configure_drjit()
-    import mitsuba as mi  # noqa: PLC0415 - needs DRJIT_LIBLLVM_PATH set first
-
-    if mi.variant() is None:
-        mi.set_variant(VARIANT)
-    return mi
+    """Mitsuba with its variant set (the renderer's one loader, ``llvm_ad_rgb``)."""
+    return load()[0]
 
 
 def _mesh_scene(mi, mesh: TriangleMesh, name: str):

@@ -1,4 +1,4 @@
-"""Build the HTML comparison report from :class:`~harness.compare.records.SceneComparison`.
+"""Build the HTML comparison report from :class:`~reports.records.SceneComparison`.
 
 Layout written under ``out_dir``::
 
@@ -35,11 +35,10 @@ import jinja2
 import numpy as np
 from markupsafe import Markup
 
-from harness.compare.outputs import jsonable
-from harness.compare.records import METRIC_FORMULAS, SceneComparison, Table
-from harness.exr import atomic_write_bytes
-from harness.metrics import luminance, white_point
 from reports import images, plots
+from reports.display import luminance, white_point
+from reports.records import METRIC_FORMULAS, SceneComparison, Table
+from scenes.files import atomic_write_bytes, jsonable
 
 __all__ = ["DEFAULT_PREVIEW_SIZE", "KEY_METRICS", "build_report", "scene_folder"]
 
@@ -169,7 +168,7 @@ def _view_panels(comparison: SceneComparison, view: str, assets: _Assets,
     for kind, array in raw.items():
         shown[kind], factor = images.downsample(array[::-1] if flip else array,
                                                 max_size=preview_size)
-    test, reference = shown.get("test"), shown.get("reference")
+    method, reference = shown.get("method"), shown.get("reference")
     white = _per_view(comparison.exposure.get("white"), view)
     if white is None and reference is not None:
         white = white_point(reference)
@@ -181,14 +180,14 @@ def _view_panels(comparison: SceneComparison, view: str, assets: _Assets,
         "units": "W m⁻² sr⁻¹" if view == "camera" else "W/m²",
         "white": white, "factor": factor, "hdr": None, "maps": [], "regions": None,
         "size": None,
-        "shape": raw["test"].shape[:2] if "test" in raw else None,
+        "shape": raw["method"].shape[:2] if "method" in raw else None,
     }
-    if test is not None and reference is not None:
+    if method is not None and reference is not None:
         panel["hdr"] = {
             layer: images.data_uri(images.encode_png(images.encode_rgbe_stack(array)))
-            for layer, array in (("test", test), ("reference", reference))
+            for layer, array in (("method", method), ("reference", reference))
         }
-        panel["size"] = test.shape[:2]
+        panel["size"] = method.shape[:2]
     if "signed" in shown:
         limit = _per_view(comparison.exposure.get("diff_range"), view)
         if not limit or limit <= 0:
@@ -196,8 +195,8 @@ def _view_panels(comparison: SceneComparison, view: str, assets: _Assets,
             limit = float(np.percentile(lum, 99)) or 1.0
         panel["maps"].append(_map_panel(
             assets, view, "signed", shown["signed"], vmin=-float(limit), vmax=float(limit),
-            title="Difference (test − reference)",
-            label="luminance of test − reference, " + panel["units"]))
+            title="Difference (method − reference)",
+            label="luminance of method − reference, " + panel["units"]))
     if "ssim" in shown:
         panel["maps"].append(_map_panel(assets, view, "ssim", shown["ssim"], vmin=0.0,
                                         vmax=1.0, title="SSIM map",
@@ -324,14 +323,14 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
 
 def _thumbnails(comparison: SceneComparison, folder: str, out_dir: Path,
                 self_contained: bool) -> dict[str, str]:
-    """Tone-mapped test and reference of the first view, at most THUMBNAIL_SIZE px."""
+    """Tone-mapped method and reference of the first view, at most THUMBNAIL_SIZE px."""
     views = _views(comparison)
     if not views:
         return {}
     view = views[0]
     white = _per_view(comparison.exposure.get("white"), view)
     out = {}
-    for layer in ("test", "reference"):
+    for layer in ("method", "reference"):
         array = comparison.images.get(f"{view}/{layer}")
         if array is None:
             continue

@@ -2,7 +2,7 @@
 colour bars and thumbnails.
 
 Tone mapping and false colour are not reimplemented here: they come from
-``harness.metrics`` (:func:`~harness.metrics.tonemap`,
+``harness.metrics`` (:func:`~reports.display`,
 :func:`~harness.metrics.false_colour`), so the report shows exactly the curve the
 metrics used.
 
@@ -26,7 +26,7 @@ import io
 import numpy as np
 from PIL import Image
 
-from harness.metrics import false_colour, luminance, tonemap
+from reports.display import false_colour, luminance, tonemap
 
 __all__ = [
     "colour_bar_png",
@@ -111,7 +111,7 @@ def decode_rgbe_stack(stack: np.ndarray) -> np.ndarray:
 
 
 def tonemapped_png(image: np.ndarray, *, white: float) -> bytes:
-    """PNG of ``harness.metrics.tonemap(image, white=white)`` (Reinhard + sRGB)."""
+    """PNG of ``reports.display(image, white=white)`` (Reinhard + sRGB)."""
     return encode_png(np.round(tonemap(image, white=white) * 255.0))
 
 

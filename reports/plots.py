@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import io
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
-from harness.compare.records import Table
-from harness.studies.pareto import EqualErrorSpeedup, pareto_front
+from reports.records import EqualErrorSpeedup, Table
+from scenes.files import atomic_write_bytes
 
 __all__ = ["convergence_figure", "cost_figure", "figure_bytes"]
 
@@ -22,10 +23,10 @@ _RC = {"svg.fonttype": "none", "svg.hashsalt": "caustics-report", "font.size": 8
 
 
 def _pyplot():
-    import matplotlib  # noqa: PLC0415 - slow import, only when a plot is drawn
+    import matplotlib  # noqa: PLC0415 - heavy, only when a plot is drawn
 
     matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt  # noqa: PLC0415
+    import matplotlib.pyplot as plt  # noqa: PLC0415 - heavy, only when a plot is drawn
 
     return plt
 
@@ -107,17 +108,17 @@ def _speedup_point(speedup: EqualErrorSpeedup, point, front_times, front_errors)
     known, else the front point nearest (in log time) to reference_time / speedup."""
     if point is not None:
         return float(point[0]), float(point[1])
-    rt_time = speedup.reference_time / speedup.speedup
+    method_time = speedup.reference_time / speedup.speedup
     if not len(front_times):
-        return rt_time, float("nan")
-    nearest = int(np.argmin(np.abs(np.log(front_times) - np.log(rt_time))))
-    return rt_time, float(front_errors[nearest])
+        return method_time, float("nan")
+    nearest = int(np.argmin(np.abs(np.log(front_times) - np.log(method_time))))
+    return method_time, float(front_errors[nearest])
 
 
 def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
                 point: tuple[float, float] | None = None):
     """Time against relMSE (log-log): every caustics-mapping configuration, their
-    Pareto front (:func:`harness.studies.pareto.pareto_front`), the reference's own
+    Pareto front (the table's ``pareto`` column), the reference's own
     error-versus-time curve, and the equal-error speedup in the title.
 
     Parameters
@@ -140,8 +141,9 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
         cm = series == "caustics_mapping"
         ax.scatter(times[cm], errors[cm], s=10, color="tab:blue", alpha=0.6,
                    label="caustics mapping configurations")
-        idx = np.flatnonzero(cm)
-        front = idx[pareto_front(times[cm], errors[cm])]
+        on_front = np.asarray(table.column("pareto"), dtype=bool)
+        front = np.flatnonzero(cm & on_front)
+        front = front[np.argsort(times[front], kind="stable")]
         ax.plot(times[front], errors[front], "-o", color="tab:blue", markersize=4,
                 label="Pareto front")
         ref = np.flatnonzero(series == "reference")
@@ -151,13 +153,13 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
                     label="reference (Mitsuba) error vs time")
         title = "Cost versus accuracy"
         if speedup is not None:
-            rt_time, rt_error = _speedup_point(speedup, point, times[front], errors[front])
+            method_time, method_error = _speedup_point(speedup, point, times[front], errors[front])
             title += f" — equal-error speedup {speedup.speedup:.4g}× ({speedup.kind})"
-            if np.isfinite(rt_error):
-                ax.annotate("", xy=(speedup.reference_time, rt_error),
-                            xytext=(rt_time, rt_error),
+            if np.isfinite(method_error):
+                ax.annotate("", xy=(speedup.reference_time, method_error),
+                            xytext=(method_time, method_error),
                             arrowprops={"arrowstyle": "->", "color": "0.3"})
-                ax.plot([speedup.reference_time], [rt_error], "x", color="tab:red",
+                ax.plot([speedup.reference_time], [method_error], "x", color="tab:red",
                         label=f"reference at equal error ({speedup.reference_time:.3g} s)")
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -172,10 +174,6 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
 def write_pdfs(folder, comparison) -> list[str]:
     """``convergence.pdf`` and ``cost_accuracy.pdf`` (for papers) beside the report's
     SVGs, when the comparison has those tables; returns the names written."""
-    from pathlib import Path  # noqa: PLC0415
-
-    from harness.exr import atomic_write_bytes  # noqa: PLC0415
-
     folder = Path(folder)
     written = []
     if comparison.convergence is not None and comparison.convergence.rows:

@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 from hypothesis import settings as hypothesis_settings
 
+from harness.checks import THRESHOLDS_FILE
 from renderers.caustics_mapping import create_context
 
 REPO = Path(__file__).resolve().parents[1]
@@ -98,14 +99,14 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
             hard_cases.add(node.split("[", 1)[1].rstrip("]").split("-")[-1])
     if not (bound_scenes or hard_cases):
         return
-    from harness.thresholds import load_thresholds  # noqa: PLC0415
+    from harness.checks.thresholds import load_thresholds  # noqa: PLC0415
 
-    bounds = [b for b in load_thresholds(REPO / "tests" / "thresholds.toml")
+    bounds = [b for b in load_thresholds(THRESHOLDS_FILE)
               if b.scene in bound_scenes]
     terminalreporter.write_sep("-", "accuracy and stability")
     if bound_scenes:
         terminalreporter.write_line(f"accuracy bounds checked: {len(bounds)} "
-                                    f"({len(bound_scenes)} scenes, tests/thresholds.toml)")
+                                    f"({len(bound_scenes)} scenes, {THRESHOLDS_FILE.name})")
     if hard_cases:
         terminalreporter.write_line(f"hard cases checked: {len(hard_cases)} "
                                     f"({', '.join(sorted(hard_cases))})")

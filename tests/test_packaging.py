@@ -12,7 +12,7 @@ from importlib.metadata import packages_distributions
 
 from tests.conftest import REPO
 
-FIRST_PARTY = {"harness", "renderers", "reports"}
+FIRST_PARTY = {"harness", "renderers", "reports", "scenes"}
 #: Imported only inside functions that need an optional extra, with the message
 #: naming the extra (pymeshlab: the bunny).
 OPTIONAL = {"pymeshlab": "bunny"}

@@ -17,7 +17,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.compare.records import MetricValue
 from harness.metrics import (
     MetricInputError,
     flip_error,
@@ -28,6 +27,7 @@ from harness.metrics import (
     structural_similarity,
     white_point,
 )
+from reports.records import MetricValue
 
 __all__ = ["Exposure", "exposure_for", "score_value", "score_view"]
 
@@ -50,23 +50,23 @@ def exposure_for(reference: np.ndarray, *, mask: np.ndarray | None = None) -> Ex
     return Exposure(white, centre - FLIP_STOPS, centre + FLIP_STOPS)
 
 
-def score_value(metric: str, test, reference, *, mask, exposure: Exposure) -> float:
-    """One metric of ``test`` against ``reference`` over ``mask``; NaN when undefined
+def score_value(metric: str, method, reference, *, mask, exposure: Exposure) -> float:
+    """One metric of ``method`` against ``reference`` over ``mask``; NaN when undefined
     (e.g. PSNR of a black region, or a flux ratio where the reference has no energy)."""
     try:
         if metric == "relmse":
-            return relative_mse(test, reference, mask=mask)
+            return relative_mse(method, reference, mask=mask)
         if metric == "relmse_trimmed":
-            return relative_mse(test, reference, mask=mask, trim=0.001)
+            return relative_mse(method, reference, mask=mask, trim=0.001)
         if metric == "psnr":
-            return peak_signal_to_noise_ratio(test, reference, mask=mask)
+            return peak_signal_to_noise_ratio(method, reference, mask=mask)
         if metric == "ssim":
-            return structural_similarity(test, reference, white=exposure.white, mask=mask)
+            return structural_similarity(method, reference, white=exposure.white, mask=mask)
         if metric == "flip":
-            return flip_error(test, reference, start_exposure=exposure.flip_start,
+            return flip_error(method, reference, start_exposure=exposure.flip_start,
                               stop_exposure=exposure.flip_stop, mask=mask)
         if metric == "flux_ratio":
-            return flux_ratio(test, reference, mask=mask)
+            return flux_ratio(method, reference, mask=mask)
     except MetricInputError:
         return float("nan")
     raise KeyError(f"unknown metric {metric!r}")
@@ -75,7 +75,7 @@ def score_value(metric: str, test, reference, *, mask, exposure: Exposure) -> fl
 METRICS = ("relmse", "relmse_trimmed", "psnr", "ssim", "flip", "flux_ratio")
 
 
-def score_view(view: str, test, reference, independent, *, regions: dict[str, np.ndarray],
+def score_view(view: str, method, reference, independent, *, regions: dict[str, np.ndarray],
                exposure: Exposure) -> tuple[list[MetricValue], dict[str, np.ndarray]]:
     """All metrics of one view over each region, with noise floors, and the maps.
 
@@ -83,7 +83,7 @@ def score_view(view: str, test, reference, independent, *, regions: dict[str, np
     ----------
     view
         ``camera`` or ``receiver<i>``.
-    test, reference, independent
+    method, reference, independent
         (H, W, 3) linear images: caustics mapping, reference mean, and an independent
         reference of other seeds (``None`` skips the noise floor).
     regions
@@ -100,16 +100,16 @@ def score_view(view: str, test, reference, independent, *, regions: dict[str, np
         if not np.asarray(mask).any():
             continue
         for metric in METRICS:
-            value = score_value(metric, test, reference, mask=mask, exposure=exposure)
+            value = score_value(metric, method, reference, mask=mask, exposure=exposure)
             floor = None
             if independent is not None:
                 floor = score_value(metric, independent, reference, mask=mask,
                                     exposure=exposure)
             values.append(MetricValue(view, region, metric, value, floor))
-    _, ssim_map = structural_similarity(test, reference, white=exposure.white, return_map=True)
-    _, flip_map = flip_error(test, reference, start_exposure=exposure.flip_start,
+    _, ssim_map = structural_similarity(method, reference, white=exposure.white, return_map=True)
+    _, flip_map = flip_error(method, reference, start_exposure=exposure.flip_start,
                              stop_exposure=exposure.flip_stop, return_map=True)
-    maps = {f"{view}/signed": signed_difference(test, reference).astype(np.float32),
+    maps = {f"{view}/signed": signed_difference(method, reference).astype(np.float32),
             f"{view}/ssim": ssim_map.astype(np.float32),
             f"{view}/flip": flip_map.astype(np.float32)}
     return values, maps

@@ -9,32 +9,15 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from harness.compare.records import METRIC_FORMULAS, SceneComparison, Table
-from harness.exr import atomic_write_bytes, write_exr
+from renderers.exr import write_exr
+from reports.records import METRIC_FORMULAS, SceneComparison, Table
+from scenes.files import atomic_write_bytes, jsonable
 
 __all__ = ["comparison_json", "write_comparison", "write_json", "write_table"]
-
-
-def jsonable(value: Any) -> Any:
-    """Plain JSON values: numpy to Python, NaN to null, ±inf to "inf"/"-inf"."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.generic):
-        return jsonable(value.item())
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    return value
 
 
 def write_json(path: str | Path, data: Any) -> None:

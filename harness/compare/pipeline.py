@@ -1,5 +1,5 @@
 """One scene, both renderers, every comparison: ``compare_scene`` builds the
-:class:`~harness.compare.records.SceneComparison` the outputs and the report use.
+:class:`~reports.records.SceneComparison` the outputs and the report use.
 
 Steps: the Mitsuba reference (from the cache when present) and an independent
 reference on disjoint seeds (the noise floor); the caustics-mapping render with the
@@ -16,17 +16,19 @@ from dataclasses import asdict, dataclass
 from typing import NamedTuple
 
 import numpy as np
+from tqdm import tqdm
 
+from harness.checks.stability import stability_summary
 from harness.compare.evaluate import exposure_for, score_view
-from harness.compare.records import SceneComparison
 from harness.compare.regions import caustic_region, object_mask
-from harness.metrics.tonemap import luminance
-from harness.scene import Scene, effects_of, with_settings
-from harness.stability import stability_summary
 from harness.studies.claims import check_five_iterations, check_one_iteration
 from harness.studies.convergence_study import convergence_study
 from harness.studies.cost_study import cost_study
 from harness.studies.runner import RealtimeRunner
+from renderers.mitsuba.reference import render_reference
+from reports.display import luminance
+from reports.records import SceneComparison
+from scenes import Scene, effects_of, with_settings
 
 __all__ = ["STUDIES", "CompareOptions", "compare_scene"]
 
@@ -68,7 +70,6 @@ class CompareOptions:
 
 
 def _references(scene: Scene, options: CompareOptions):
-    from renderers.mitsuba.reference import render_reference  # noqa: PLC0415
 
     s = scene.settings
     reference = render_reference(scene, cache=options.cache, use_cache=options.use_cache,
@@ -80,7 +81,7 @@ def _references(scene: Scene, options: CompareOptions):
     return reference, independent
 
 
-def _camera_is_blind(reference: np.ndarray, test: np.ndarray) -> bool:
+def _camera_is_blind(reference: np.ndarray, method: np.ndarray) -> bool:
     """The reference camera image is black where the real-time one is lit: ptracer
     cannot connect receivers seen only through a specular surface (everything under
     a water surface). Blind when, over the pixels the real-time image lights (above
@@ -88,7 +89,7 @@ def _camera_is_blind(reference: np.ndarray, test: np.ndarray) -> bool:
     real-time image's energy. ptracer is unbiased, so this holds at any sample count
     (at 2 spp most pixels are still black), while a few stray particles (seabed:
     about 1 % of the energy) do not make a usable reference."""
-    rt = luminance(test)
+    rt = luminance(method)
     top = float(np.percentile(rt, 99))
     if top <= 0:
         return False
@@ -99,7 +100,6 @@ def _camera_is_blind(reference: np.ndarray, test: np.ndarray) -> bool:
 def _progress_bar(total: int, enabled: bool, label: str):
     if not enabled:
         return None, (lambda: None)
-    from tqdm import tqdm  # noqa: PLC0415
 
     bar = tqdm(total=total, desc=label, unit="render", leave=False)
     return bar, (lambda: bar.update(1))
@@ -109,7 +109,7 @@ class _View(NamedTuple):
     """One scored image: the camera or a receiver map, with its regions."""
 
     name: str
-    test: np.ndarray
+    method: np.ndarray
     reference: np.ndarray
     independent: np.ndarray
     regions: dict[str, np.ndarray]
@@ -117,21 +117,21 @@ class _View(NamedTuple):
     exposure_mask: np.ndarray | None
 
 
-def _views(scene: Scene, geometry, test, reference, independent):
+def _views(scene: Scene, geometry, method, reference, independent):
     """The views to score, and why the camera is left out (None if it is not)."""
     views, note = [], None
-    if _camera_is_blind(reference.camera, test.camera):
+    if _camera_is_blind(reference.camera, method.camera):
         note = ("camera not compared: the reference camera image is black "
                 "(ptracer cannot see receivers through a specular surface)")
     else:
         obj = object_mask(scene.camera, geometry)
-        views.append(_View("camera", test.camera, reference.camera, independent.camera,
+        views.append(_View("camera", method.camera, reference.camera, independent.camera,
                            {"full": np.ones(obj.shape, bool), "object_masked": ~obj},
                            {"mask_object": obj}, ~obj))
-    for i, (rt_map, ref_map, ind_map) in enumerate(zip(
-            test.receivers, reference.receivers, independent.receivers, strict=True)):
+    for i, (method_map, ref_map, ind_map) in enumerate(zip(
+            method.receivers, reference.receivers, independent.receivers, strict=True)):
         caustic = caustic_region(ref_map.irradiance)
-        views.append(_View(f"receiver{i}", rt_map.irradiance, ref_map.irradiance,
+        views.append(_View(f"receiver{i}", method_map.irradiance, ref_map.irradiance,
                            ind_map.irradiance,
                            {"full": np.ones(caustic.shape, bool), "caustic": caustic},
                            {"mask_caustic": caustic}, None))
@@ -144,11 +144,11 @@ def _score_views(views: list[_View]):
     exposure = {"white": {}, "flip_start": {}, "flip_stop": {}, "diff_range": {}}
     for view in views:
         expo = exposure_for(view.reference, mask=view.exposure_mask)
-        values, maps = score_view(view.name, view.test, view.reference, view.independent,
+        values, maps = score_view(view.name, view.method, view.reference, view.independent,
                                   regions=view.regions, exposure=expo)
         metrics += values
         images.update(maps)
-        images[f"{view.name}/test"] = np.asarray(view.test, np.float32)
+        images[f"{view.name}/method"] = np.asarray(view.method, np.float32)
         images[f"{view.name}/reference"] = np.asarray(view.reference, np.float32)
         for name, mask in view.masks.items():
             images[f"{view.name}/{name}"] = mask
@@ -157,7 +157,7 @@ def _score_views(views: list[_View]):
         exposure["flip_stop"][view.name] = expo.flip_stop
         signed = np.abs(maps[f"{view.name}/signed"])
         exposure["diff_range"][view.name] = float(np.percentile(signed, 99.5)) or 1.0
-        for kind in ("test", "reference", "signed", "ssim", "flip"):
+        for kind in ("method", "reference", "signed", "ssim", "flip"):
             files[f"{view.name}/{kind}"] = f"{view.name}_{kind}.exr"
     return metrics, images, exposure, files
 
@@ -167,9 +167,9 @@ def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -
     reference, independent = _references(scene, options)
     with RealtimeRunner(scene, repeats=options.repeats) as runner:
         frame, frame_time = runner.timed()
-        test = frame.result
+        method = frame.result
         gl_renderer = runner.ctx.info.get("GL_RENDERER", "unknown")
-        views, camera_note = _views(scene, runner.geometry, test, reference, independent)
+        views, camera_note = _views(scene, runner.geometry, method, reference, independent)
         metrics, images, exposure, files = _score_views(views)
 
         convergence = cost = speedup = speedup_point = None
@@ -194,16 +194,16 @@ def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -
             if bar is not None:
                 bar.close()
 
-    stability = stability_summary(scene, runner.geometry, test, convergence)
+    stability = stability_summary(scene, runner.geometry, method, convergence)
     provenance = {
         "scene_file": scene.source,
         "caustics_mapping": {
-            "passes": test.metadata.get("passes"),
-            "timings_ms": {k: v * 1e3 for k, v in test.timings.items()},
+            "passes": method.metadata.get("passes"),
+            "timings_ms": {k: v * 1e3 for k, v in method.timings.items()},
             "frame_time_ms": frame_time * 1e3,
-            "timer": test.timer,
-            "lost_splats": test.metadata.get("lost_splats"),
-            "status_counts": test.metadata.get("status_counts"),
+            "timer": method.timer,
+            "lost_splats": method.metadata.get("lost_splats"),
+            "status_counts": method.metadata.get("status_counts"),
             "gl_renderer": gl_renderer,
         },
         "reference": {**{k: reference.metadata.get(k) for k in REFERENCE_KEYS},
@@ -224,8 +224,8 @@ def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -
 
 
 def _claims(convergence) -> dict[str, str]:
-    rows = [dict(zip(convergence.columns, r, strict=True)) for r in convergence.rows
-            if r[0] == "modified" and not r[1]]
+    rows = [r for r in convergence.records()
+            if r["estimator"] == "modified" and not r["safeguarded"]]
     five = check_five_iterations({r["iteration"]: r["p95_error_texels"] for r in rows})[1]
     one = check_one_iteration({r["iteration"]: r["relmse"] for r in rows})[1]
     return {"error negligible after five iterations (modified estimator)": five,

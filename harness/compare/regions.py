@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.geometry import SceneGeometry
-from harness.metrics.tonemap import luminance
 from harness.raycast import MeshTracer, camera_rays
-from harness.scene.model import Camera
+from reports.display import luminance
+from scenes.geometry import SceneGeometry
+from scenes.model import Camera
 
 __all__ = ["CAUSTIC_FRACTION", "caustic_region", "object_mask"]
 

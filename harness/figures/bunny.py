@@ -2,35 +2,35 @@
 
 from __future__ import annotations
 
+import matplotlib.pyplot as plt
 import numpy as np
 
-from harness.compare.records import Table
 from harness.figures.common import FigureContext, receiver_scores, shared_white, show
 from harness.studies.runner import frame_seconds
+from reports.records import Table
+from scenes.geometry import build_geometry
 
 
 def figure_10(ctx: FigureContext):
     """Fig. 10: photon-traced reference (a) and caustics mapping (b) of the bunny."""
-    import matplotlib.pyplot as plt  # noqa: PLC0415
 
     scene = ctx.scene("bunny")
-    ref, test = ctx.reference(scene), ctx.realtime(scene)
+    ref, method = ctx.reference(scene), ctx.realtime(scene)
     white = shared_white(ref.camera)
     rwhite = shared_white(ref.receivers[0].irradiance)
     fig, axes = plt.subplots(2, 2, figsize=(6.4, 6.4))
     show(axes[0, 0], ref.camera, white=white, receiver=False, title="(a) reference camera")
-    show(axes[0, 1], test.camera, white=white, receiver=False, title="(b) caustics mapping")
+    show(axes[0, 1], method.camera, white=white, receiver=False, title="(b) caustics mapping")
     show(axes[1, 0], ref.receivers[0].irradiance, white=rwhite, receiver=True,
          title="reference receiver irradiance")
-    show(axes[1, 1], test.receivers[0].irradiance, white=rwhite, receiver=True,
+    show(axes[1, 1], method.receivers[0].irradiance, white=rwhite, receiver=True,
          title="caustics mapping receiver irradiance")
-    scores = receiver_scores(test.receivers[0].irradiance, ref.receivers[0].irradiance)
-    ms = frame_seconds(test.timings) * 1e3
+    scores = receiver_scores(method.receivers[0].irradiance, ref.receivers[0].irradiance)
+    ms = frame_seconds(method.timings) * 1e3
     data = {"scene": scene.name, "grid": scene.settings.grid, "frame_ms": ms,
             "triangles": None, **{f"receiver_{k}": v for k, v in scores.items()},
             "reference_photons": ref.metadata["photons"],
             "reference_relative_noise": ref.metadata["relative_noise"]}
-    from harness.geometry import build_geometry  # noqa: PLC0415
 
     data["triangles"] = len(build_geometry(scene).objects[0].mesh.faces)
     caption = (f"Fig. 10 analogue: Stanford bunny ({data['triangles']} triangles), double "
@@ -43,7 +43,6 @@ def figure_10(ctx: FigureContext):
 def figure_13a(ctx: FigureContext):
     """Fig. 13a: coloured caustics from absorption: per-channel flux of the absorbing
     bunny relative to the clear one, for both renderers (Beer-Lambert, Eq. 7)."""
-    import matplotlib.pyplot as plt  # noqa: PLC0415
 
     clear, coloured = ctx.scene("bunny"), ctx.scene("colored_bunny")
     results = {(r, s.name): (ctx.reference(s) if r == "reference" else ctx.realtime(s))
@@ -53,16 +52,19 @@ def figure_13a(ctx: FigureContext):
         a = results[(renderer, "bunny")].receivers[0].total_flux()
         b = results[(renderer, "colored_bunny")].receivers[0].total_flux()
         ratio = np.where(a > 0, b / np.maximum(a, 1e-30), np.nan)
-        rows.append((renderer, *[float(x) for x in ratio]))
+        rows.append({"renderer": renderer, "transmitted_r": float(ratio[0]),
+                     "transmitted_g": float(ratio[1]), "transmitted_b": float(ratio[2])})
     fig, axes = plt.subplots(1, 2, figsize=(6.4, 3.2))
     ref_img = results[("reference", "colored_bunny")].receivers[0].irradiance
     white = shared_white(ref_img)
     show(axes[0], results[("caustics mapping", "colored_bunny")].receivers[0].irradiance,
          white=white, receiver=True, title="caustics mapping")
     show(axes[1], ref_img, white=white, receiver=True, title="reference")
-    table = Table(("renderer", "transmitted_r", "transmitted_g", "transmitted_b"), tuple(rows))
+    table = Table.from_records(("renderer", "transmitted_r", "transmitted_g", "transmitted_b"),
+                               rows)
     k = coloured.objects[0].material.absorption
     caption = (f"Fig. 13a analogue: absorbing bunny (K_a = {k[0]:g}, {k[1]:g}, {k[2]:g} 1/m). "
                "Caustic flux relative to the clear bunny (R, G, B): " + "; ".join(
-                   f"{r[0]} {r[1]:.3f}, {r[2]:.3f}, {r[3]:.3f}" for r in rows))
+                   f"{r['renderer']} {r['transmitted_r']:.3f}, {r['transmitted_g']:.3f}, "
+                   f"{r['transmitted_b']:.3f}" for r in rows))
     return ctx.save("fig13a", fig, caption=caption, table=table)

@@ -4,7 +4,7 @@ Every figure ``NAME`` writes ``NAME.png`` and ``NAME.pdf`` (matplotlib), the dat
 was drawn from (``NAME.csv`` and/or ``NAME.json``) and ``NAME.txt``, a caption that
 states the settings and the measured numbers. Receiver maps are drawn with +v up
 (row 0 = vmin at the bottom); images are tone-mapped with the reference's white
-point (``harness.metrics.tonemap``) so both sides of a comparison share one curve.
+point (``reports.display``) so both sides of a comparison share one curve.
 """
 
 from __future__ import annotations
@@ -15,15 +15,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import matplotlib.pyplot as plt
 import numpy as np
 
-from harness.compare.evaluate import score_value
+from harness.compare.evaluate import exposure_for, score_value
 from harness.compare.outputs import write_json, write_table
-from harness.compare.records import Table
 from harness.compare.regions import caustic_region
-from harness.exr import atomic_write_bytes
-from harness.metrics.tonemap import tonemap, white_point
-from harness.scene import Scene, load_scene, with_settings
+from renderers.caustics_mapping import create_context, render
+from renderers.mitsuba.reference import render_reference
+from reports.display import tonemap, white_point
+from reports.records import Table
+from scenes import Scene, load_scene, with_settings
+from scenes.files import atomic_write_bytes
 
 __all__ = ["QUICK", "FigureContext", "FigureResult", "default_scenes_dir", "receiver_scores"]
 
@@ -69,7 +72,6 @@ class FigureContext:
 
     def realtime(self, scene: Scene):
         """Caustics-mapping render (``RenderResult``) on the shared context."""
-        from renderers.caustics_mapping import create_context, render  # noqa: PLC0415
 
         if self._gl is None:
             self._gl = create_context()
@@ -78,7 +80,6 @@ class FigureContext:
 
     def reference(self, scene: Scene):
         """Mitsuba reference (``RenderResult``), from the cache when present."""
-        from renderers.mitsuba.reference import render_reference  # noqa: PLC0415
 
         return render_reference(scene, cache=self.cache, progress=self.progress)
 
@@ -92,7 +93,6 @@ class FigureContext:
     def save(self, name: str, figure, *, caption: str, table: Table | None = None,
              data: dict | None = None) -> FigureResult:
         """Write PNG, PDF, data and caption of one figure (atomically)."""
-        import matplotlib.pyplot as plt  # noqa: PLC0415
 
         files = []
         for fmt, dpi in (("png", 150), ("pdf", None)):
@@ -112,16 +112,15 @@ class FigureContext:
         return FigureResult(name, caption, tuple(files))
 
 
-def receiver_scores(test: np.ndarray, reference: np.ndarray) -> dict[str, float]:
+def receiver_scores(method: np.ndarray, reference: np.ndarray) -> dict[str, float]:
     """relMSE, SSIM and FLIP of a receiver map over the reference's caustic region,
     and the total-flux ratio over the whole map."""
-    from harness.compare.evaluate import exposure_for  # noqa: PLC0415
 
     mask = caustic_region(reference)
     exposure = exposure_for(reference)
-    out = {m: score_value(m, test, reference, mask=mask, exposure=exposure)
+    out = {m: score_value(m, method, reference, mask=mask, exposure=exposure)
            for m in ("relmse", "ssim", "flip")}
-    out["flux_ratio"] = score_value("flux_ratio", test, reference,
+    out["flux_ratio"] = score_value("flux_ratio", method, reference,
                                     mask=np.ones(mask.shape, bool), exposure=exposure)
     return out
 

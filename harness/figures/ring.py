@@ -2,27 +2,28 @@
 
 from __future__ import annotations
 
+import matplotlib.pyplot as plt
+
 from harness.figures.common import FigureContext, receiver_scores, shared_white, show
 from harness.studies.runner import frame_seconds
 
 
 def figure_12(ctx: FigureContext):
     """Fig. 12: the ring's reflective caustic, caustics mapping vs reference."""
-    import matplotlib.pyplot as plt  # noqa: PLC0415
 
     scene = ctx.scene("metal_ring")
-    ref, test = ctx.reference(scene), ctx.realtime(scene)
+    ref, method = ctx.reference(scene), ctx.realtime(scene)
     fig, axes = plt.subplots(1, 3, figsize=(9, 3.2))
     white = shared_white(ref.camera)
-    show(axes[0], test.camera, white=white, receiver=False, title="caustics mapping")
+    show(axes[0], method.camera, white=white, receiver=False, title="caustics mapping")
     show(axes[1], ref.camera, white=white, receiver=False, title="reference")
     rwhite = shared_white(ref.receivers[0].irradiance)
-    show(axes[2], test.receivers[0].irradiance, white=rwhite, receiver=True,
+    show(axes[2], method.receivers[0].irradiance, white=rwhite, receiver=True,
          title="caustics mapping receiver map")
-    scores = receiver_scores(test.receivers[0].irradiance, ref.receivers[0].irradiance)
-    data = {"scene": scene.name, "passes": test.metadata.get("passes"),
-            "map_faces": test.metadata.get("map_faces"),
-            "frame_ms": frame_seconds(test.timings) * 1e3,
+    scores = receiver_scores(method.receivers[0].irradiance, ref.receivers[0].irradiance)
+    data = {"scene": scene.name, "passes": method.metadata.get("passes"),
+            "map_faces": method.metadata.get("map_faces"),
+            "frame_ms": frame_seconds(method.timings) * 1e3,
             **{f"receiver_{k}": v for k, v in scores.items()}}
     caption = (f"Fig. 12 analogue: metal ring, one specular reflection, point light with "
                f"cube-map faces {', '.join(data['map_faces'] or [])}. Receiver relMSE "

@@ -3,12 +3,13 @@
 
 from __future__ import annotations
 
+import matplotlib.pyplot as plt
 import numpy as np
 
-from harness.compare.records import Table
 from harness.figures.common import FigureContext, receiver_scores, shared_white, show
 from harness.metrics import false_colour
 from harness.studies.runner import frame_seconds
+from reports.records import Table
 
 METHODS = (("distance impostors (secant)", "secant"), ("caustics mapping (modified)", "modified"))
 
@@ -30,7 +31,6 @@ def _sphere_runs(ctx: FigureContext, iterations: int = 3):
 def figure_06(ctx: FigureContext):
     """Fig. 6: distance impostors (secant), caustics mapping (modified) and the
     reference on the glass sphere, three iterations each."""
-    import matplotlib.pyplot as plt  # noqa: PLC0415
 
     runs = _sphere_runs(ctx)
     ref = runs["reference"]
@@ -62,7 +62,6 @@ def figure_06(ctx: FigureContext):
 def figure_07(ctx: FigureContext):
     """Fig. 7: difference images of Fig. 6's two methods against the reference
     (receiver irradiance, signed, one shared symmetric colour scale)."""
-    import matplotlib.pyplot as plt  # noqa: PLC0415
 
     runs = _sphere_runs(ctx)
     ref = runs["reference"].receivers[0].irradiance
@@ -76,21 +75,21 @@ def figure_07(ctx: FigureContext):
         ax.imshow(false_colour(d, vmin=-limit, vmax=limit), origin="lower")
         ax.set_title(label, fontsize=8)
         ax.set_axis_off()
-        rows.append((label, float(np.abs(d).mean()), float(np.percentile(np.abs(d), 99)),
-                     float(d.min()), float(d.max())))
+        rows.append({"method": label, "mean_abs_w_m2": float(np.abs(d).mean()),
+                     "p99_abs_w_m2": float(np.percentile(np.abs(d), 99)),
+                     "min_w_m2": float(d.min()), "max_w_m2": float(d.max())})
     mappable = plt.cm.ScalarMappable(cmap="RdBu_r", norm=plt.Normalize(-limit, limit))
-    fig.colorbar(mappable, ax=axes, shrink=0.8, label="test − reference, W/m²")
-    table = Table(("method", "mean_abs_w_m2", "p99_abs_w_m2", "min_w_m2", "max_w_m2"),
-                  tuple(rows))
+    fig.colorbar(mappable, ax=axes, shrink=0.8, label="method − reference, W/m²")
+    table = Table.from_records(("method", "mean_abs_w_m2", "p99_abs_w_m2", "min_w_m2",
+                                "max_w_m2"), rows)
     caption = ("Fig. 7 analogue: signed difference of receiver irradiance against the "
-               "reference. " + "; ".join(f"{r[0]}: mean |d| {r[1]:.3g} W/m², p99 {r[2]:.3g}"
-                                           for r in rows))
+               "reference. " + "; ".join(f"{r['method']}: mean |d| {r['mean_abs_w_m2']:.3g} "
+                                           f"W/m², p99 {r['p99_abs_w_m2']:.3g}" for r in rows))
     return ctx.save("fig07", fig, caption=caption, table=table)
 
 
 def figure_11(ctx: FigureContext):
     """Fig. 11: refractive grid 64x64 vs 128x128: gaps between splats."""
-    import matplotlib.pyplot as plt  # noqa: PLC0415
 
     ref = ctx.reference(ctx.scene("glass_sphere"))
     reference = ref.receivers[0].irradiance
@@ -109,40 +108,43 @@ def figure_11(ctx: FigureContext):
         scores = receiver_scores(image, reference)
         # A gap: a texel of the reference's caustic with under 10 % of its light.
         gaps = float(np.mean(image.mean(axis=-1)[mask] < 0.1 * reference.mean(axis=-1)[mask]))
-        rows.append((grid, scores["relmse"], gaps, frame_seconds(result.timings) * 1e3))
+        rows.append({"grid": grid, "receiver_relmse": scores["relmse"], "gap_fraction": gaps,
+                     "frame_ms": frame_seconds(result.timings) * 1e3})
         show(ax, image, white=white, receiver=True,
              title=f"grid {grid}: relMSE {scores['relmse']:.3g}, gaps {gaps:.1%}")
     show(axes[2], reference, white=white, receiver=True, title="reference")
-    table = Table(("grid", "receiver_relmse", "gap_fraction", "frame_ms"), tuple(rows))
+    table = Table.from_records(("grid", "receiver_relmse", "gap_fraction", "frame_ms"), rows)
     caption = (f"Fig. 11 analogue: receiver irradiance with a 64² and a 128² refractive grid, "
                f"{fine}² caustic map, fixed 1-texel splats. "
-               + "; ".join(f"grid {r[0]}: relMSE {r[1]:.3g}, {r[2]:.1%} of caustic texels "
-                           f"below 10 % of the reference (gaps), {r[3]:.1f} ms" for r in rows))
+               + "; ".join(f"grid {r['grid']}: relMSE {r['receiver_relmse']:.3g}, "
+                           f"{r['gap_fraction']:.1%} of caustic texels below 10 % of the "
+                           f"reference (gaps), {r['frame_ms']:.1f} ms" for r in rows))
     return ctx.save("fig11", fig, caption=caption, table=table)
 
 
 def figure_13b(ctx: FigureContext):
     """Fig. 13b: dispersion: one IOR per RGB channel; the channels' caustic centroids
     separate, and both renderers must separate them the same way."""
-    import matplotlib.pyplot as plt  # noqa: PLC0415
 
     scene = ctx.scene("dispersion_sphere")
-    ref, test = ctx.reference(scene), ctx.realtime(scene)
+    ref, method = ctx.reference(scene), ctx.realtime(scene)
     extent = ref.receivers[0].extent
     fig, axes = plt.subplots(1, 2, figsize=(6.4, 3.2))
     rows = []
     white = shared_white(ref.receivers[0].irradiance)
-    for ax, (label, result) in zip(axes, (("caustics mapping", test), ("reference", ref)),
+    for ax, (label, result) in zip(axes, (("caustics mapping", method), ("reference", ref)),
                                    strict=True):
         image = result.receivers[0].irradiance
         show(ax, image, white=white, receiver=True, title=label)
-        rows.extend((label, channel, *_centroid(image[..., c], extent))
+        rows.extend(dict(zip(("centroid_u_m", "centroid_v_m", "radius_m"),
+                             _centroid(image[..., c], extent), strict=True),
+                         renderer=label, channel=channel)
                     for c, channel in enumerate("RGB"))
-    table = Table(("renderer", "channel", "centroid_u_m", "centroid_v_m", "radius_m"),
-                  tuple(rows))
-    spread = {r[0]: max(x[4] for x in rows if x[0] == r[0]) - min(x[4] for x in rows
-                                                                   if x[0] == r[0])
-              for r in rows}
+    table = Table.from_records(("renderer", "channel", "centroid_u_m", "centroid_v_m",
+                                "radius_m"), rows)
+    radii = {r["renderer"]: [x["radius_m"] for x in rows if x["renderer"] == r["renderer"]]
+             for r in rows}
+    spread = {name: max(values) - min(values) for name, values in radii.items()}
     caption = ("Fig. 13b analogue: dispersion (IOR " + ", ".join(
         f"{n:g}" for n in scene.objects[0].material.iors) + "). Spread of the channels' "
         "caustic radii: " + "; ".join(f"{k} {v * 1e3:.1f} mm" for k, v in spread.items()))

@@ -2,7 +2,6 @@
 
 from harness.metrics.differences import (
     absolute_difference,
-    false_colour,
     relative_difference,
     signed_difference,
 )
@@ -14,7 +13,7 @@ from harness.metrics.scores import (
     relative_mse,
     structural_similarity,
 )
-from harness.metrics.tonemap import luminance, tonemap, white_point
+from reports.display import false_colour, luminance, tonemap, white_point
 
 __all__ = [
     "MetricInputError",

@@ -1,27 +1,29 @@
 """Scalar image metrics with optional region masks.
 
-Every function takes ``test`` and ``reference`` as (H, W, 3) arrays in the same
+Every function takes ``method`` and ``reference`` as (H, W, 3) arrays in the same
 linear units and an optional boolean ``mask`` (H, W) selecting the pixels scored.
 
 relMSE        mean over pixels and channels of d² / (reference² + ε), ε = 0.01;
               the trimmed form drops the largest 0.1 % of the per-value terms first
               (outliers from fireflies or single-texel splats).
 PSNR          10 log10(peak² / MSE), peak = the reference's maximum in the mask.
-SSIM          Wang et al. 2004 on tone-mapped images (``harness.metrics.tonemap``):
+SSIM          Wang et al. 2004 on tone-mapped images (``reports.display``):
               Gaussian weights σ = 1.5, population covariance, K1 = 0.01, K2 = 0.03,
               data_range = 1; the mean of the SSIM map over the mask.
 FLIP          HDR-FLIP (Andersson et al. 2021) through ``flip-evaluator`` with a
               fixed exposure range [start, stop] so a series is comparable;
               the mean of the FLIP map over the mask.
-flux ratio    Σ test / Σ reference (luminance-weighted), the energy check.
+flux ratio    Σ method / Σ reference (luminance-weighted), the energy check.
 """
 
 from __future__ import annotations
 
+import flip_evaluator
 import numpy as np
+from skimage.metrics import structural_similarity as ssim
 
-from harness.errors import HarnessError
-from harness.metrics.tonemap import luminance, tonemap
+from reports.display import luminance, tonemap
+from scenes.errors import HarnessError
 
 __all__ = [
     "MetricInputError",
@@ -40,28 +42,28 @@ class MetricInputError(HarnessError, ValueError):
     """Images or options a metric cannot use (shape, NaN, negative HDR, bad range)."""
 
 
-def _check(test, reference, mask) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    test = np.asarray(test, np.float64)
+def _check(method, reference, mask) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    method = np.asarray(method, np.float64)
     reference = np.asarray(reference, np.float64)
-    if test.shape != reference.shape:
-        raise MetricInputError(f"shapes differ: test {test.shape}, reference {reference.shape}")
-    if test.ndim != 3 or test.shape[2] != 3:
-        raise MetricInputError(f"expected (H, W, 3) images, got {test.shape}")
-    if not (np.isfinite(test).all() and np.isfinite(reference).all()):
+    if method.shape != reference.shape:
+        raise MetricInputError(f"shapes differ: method {method.shape}, reference {reference.shape}")
+    if method.ndim != 3 or method.shape[2] != 3:
+        raise MetricInputError(f"expected (H, W, 3) images, got {method.shape}")
+    if not (np.isfinite(method).all() and np.isfinite(reference).all()):
         raise MetricInputError("images hold NaN or Inf")
     if mask is None:
-        mask = np.ones(test.shape[:2], bool)
+        mask = np.ones(method.shape[:2], bool)
     mask = np.asarray(mask, bool)
-    if mask.shape != test.shape[:2]:
-        raise MetricInputError(f"mask shape {mask.shape} does not match {test.shape[:2]}")
+    if mask.shape != method.shape[:2]:
+        raise MetricInputError(f"mask shape {mask.shape} does not match {method.shape[:2]}")
     if not mask.any():
         raise MetricInputError("mask selects no pixels")
-    return test, reference, mask
+    return method, reference, mask
 
 
-def relative_mse(test, reference, *, mask=None, epsilon: float = RELMSE_EPSILON,
+def relative_mse(method, reference, *, mask=None, epsilon: float = RELMSE_EPSILON,
                  trim: float = 0.0) -> float:
-    """Mean of (test − ref)² / (ref² + ε) over masked pixels and channels.
+    """Mean of (method − ref)² / (ref² + ε) over masked pixels and channels.
 
     Parameters
     ----------
@@ -72,18 +74,18 @@ def relative_mse(test, reference, *, mask=None, epsilon: float = RELMSE_EPSILON,
         Fraction of the largest terms to drop before averaging (0.001 for the
         trimmed variant).
     """
-    test, reference, mask = _check(test, reference, mask)
-    terms = ((test - reference) ** 2 / (reference**2 + epsilon))[mask].ravel()
+    method, reference, mask = _check(method, reference, mask)
+    terms = ((method - reference) ** 2 / (reference**2 + epsilon))[mask].ravel()
     if trim > 0:
         keep = terms.size - int(np.floor(trim * terms.size))
         terms = np.partition(terms, keep - 1)[:keep] if keep < terms.size else terms
     return float(terms.mean())
 
 
-def peak_signal_to_noise_ratio(test, reference, *, mask=None) -> float:
+def peak_signal_to_noise_ratio(method, reference, *, mask=None) -> float:
     """10 log10(peak² / MSE) in dB, peak = max reference value in the mask; inf if equal."""
-    test, reference, mask = _check(test, reference, mask)
-    mse = float(((test - reference) ** 2)[mask].mean())
+    method, reference, mask = _check(method, reference, mask)
+    mse = float(((method - reference) ** 2)[mask].mean())
     peak = float(reference[mask].max())
     if mse == 0:
         return float("inf")
@@ -92,7 +94,7 @@ def peak_signal_to_noise_ratio(test, reference, *, mask=None) -> float:
     return 10.0 * np.log10(peak**2 / mse)
 
 
-def structural_similarity(test, reference, *, white: float, mask=None,
+def structural_similarity(method, reference, *, white: float, mask=None,
                           return_map: bool = False):
     """Mean SSIM of tone-mapped images over ``mask`` (and the (H, W) map if asked).
 
@@ -101,10 +103,9 @@ def structural_similarity(test, reference, *, white: float, mask=None,
     white
         White point of the tone curve, from the reference (``white_point``).
     """
-    from skimage.metrics import structural_similarity as ssim  # noqa: PLC0415
 
-    test, reference, mask = _check(test, reference, mask)
-    a, b = tonemap(test, white=white), tonemap(reference, white=white)
+    method, reference, mask = _check(method, reference, mask)
+    a, b = tonemap(method, white=white), tonemap(reference, white=white)
     _, full = ssim(a, b, gaussian_weights=True, sigma=1.5, use_sample_covariance=False,
                    K1=0.01, K2=0.03, data_range=1.0, channel_axis=-1, full=True)
     ssim_map = full.mean(axis=-1)
@@ -112,27 +113,26 @@ def structural_similarity(test, reference, *, white: float, mask=None,
     return (value, ssim_map) if return_map else value
 
 
-def flip_error(test, reference, *, start_exposure: float, stop_exposure: float,
+def flip_error(method, reference, *, start_exposure: float, stop_exposure: float,
                mask=None, pixels_per_degree: float = 67.0, return_map: bool = False):
     """Mean HDR-FLIP over ``mask`` (and the (H, W) map if asked).
 
     ``flip-evaluator`` calls ``sys.exit`` on arguments it dislikes, so everything is
     checked here first and a :class:`MetricInputError` raised instead.
     """
-    import flip_evaluator  # noqa: PLC0415
 
-    test, reference, mask = _check(test, reference, mask)
-    if (test < 0).any() or (reference < 0).any():
+    method, reference, mask = _check(method, reference, mask)
+    if (method < 0).any() or (reference < 0).any():
         raise MetricInputError("HDR-FLIP needs non-negative images")
     if not (np.isfinite(start_exposure) and np.isfinite(stop_exposure)):
         raise MetricInputError("exposures must be finite")
     if start_exposure > stop_exposure:
         raise MetricInputError(
             f"start exposure {start_exposure} exceeds stop exposure {stop_exposure}")
-    if min(test.shape[:2]) < 2:
+    if min(method.shape[:2]) < 2:
         raise MetricInputError("FLIP needs images of at least 2x2 pixels")
     flip_map, _, _ = flip_evaluator.evaluate(
-        np.ascontiguousarray(reference, np.float32), np.ascontiguousarray(test, np.float32),
+        np.ascontiguousarray(reference, np.float32), np.ascontiguousarray(method, np.float32),
         "HDR", inputsRGB=False, applyMagma=False, computeMeanError=False,
         parameters={"startExposure": float(start_exposure),
                     "stopExposure": float(stop_exposure), "ppd": float(pixels_per_degree)},
@@ -144,10 +144,10 @@ def flip_error(test, reference, *, start_exposure: float, stop_exposure: float,
     return (value, flip_map) if return_map else value
 
 
-def flux_ratio(test, reference, *, mask=None) -> float:
-    """Σ luminance(test) / Σ luminance(reference) over the mask (1 = energy conserved)."""
-    test, reference, mask = _check(test, reference, mask)
+def flux_ratio(method, reference, *, mask=None) -> float:
+    """Σ luminance(method) / Σ luminance(reference) over the mask (1 = energy conserved)."""
+    method, reference, mask = _check(method, reference, mask)
     ref_sum = float(luminance(reference)[mask].sum())
     if ref_sum <= 0:
         raise MetricInputError("reference holds no energy in the mask")
-    return float(luminance(test)[mask].sum()) / ref_sum
+    return float(luminance(method)[mask].sum()) / ref_sum

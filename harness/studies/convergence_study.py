@@ -12,10 +12,12 @@ from __future__ import annotations
 import numpy as np
 
 from harness.compare.evaluate import score_value
-from harness.compare.records import Table
 from harness.raycast import ReceiverTracer
 from harness.studies.convergence import iteration_stats, lookups_per_vertex
 from harness.studies.runner import RealtimeRunner
+from renderers.caustics_mapping.caustic_trace import STATUS
+from renderers.caustics_mapping.lights import light_setups
+from reports.records import Table
 
 __all__ = ["COLUMNS", "CONFIGS", "convergence_study", "texel_footprint"]
 
@@ -30,7 +32,6 @@ def texel_footprint(runner: RealtimeRunner, hits: dict, points: np.ndarray) -> n
     """Width (m) of one caustic-map texel at each point, seen from the light that
     traced it: 2 t d / M for a perspective view of half-angle tangent t at distance
     d, 2 h / M for an orthographic view of half-width h."""
-    from renderers.caustics_mapping.lights import light_setups  # noqa: PLC0415
 
     setups = light_setups(runner.scene, runner.geometry)
     size = runner.scene.settings.caustic_map
@@ -61,7 +62,6 @@ def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np
     progress
         Optional callable advanced once per render.
     """
-    from renderers.caustics_mapping.caustic_trace import STATUS  # noqa: PLC0415
 
     tracer = ReceiverTracer(runner.geometry)
     rows = []

@@ -17,9 +17,10 @@ from __future__ import annotations
 import numpy as np
 
 from harness.compare.evaluate import score_value
-from harness.compare.records import Table
 from harness.studies.pareto import EqualErrorSpeedup, equal_error_speedup, pareto_front
 from harness.studies.runner import RealtimeRunner, caustic_seconds
+from renderers.mitsuba.reference import estimate_receivers
+from reports.records import Table
 
 __all__ = ["COLUMNS", "cost_study", "sweep_configs"]
 
@@ -41,6 +42,11 @@ def sweep_configs(*, quick: bool) -> list[dict]:
     return configs
 
 
+def _row(series: str, label: str, **values) -> dict:
+    """One cost-table row by column name (``pareto`` is added once all rows exist)."""
+    return {"series": series, "label": label, **values}
+
+
 def _label(config: dict) -> str:
     return ", ".join(f"{k}={v}" for k, v in config.items() if k != "positions_map")
 
@@ -58,7 +64,6 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
         Photons per seed of the reference; the curve uses 1/256 .. 1/4 of it
         (1/64 .. 1/4 when ``quick``).
     """
-    from renderers.mitsuba.reference import estimate_receivers  # noqa: PLC0415
 
     scene = runner.scene
     s = scene.settings
@@ -66,17 +71,17 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
     base_frame, base_time = runner.timed(clock=caustic_seconds)
     base_error = score_value("relmse", base_frame.result.receivers[0].irradiance, reference,
                              mask=caustic, exposure=None)
-    rows.append(("caustics_mapping", "scene settings", s.estimator, s.iterations, s.grid,
-                 s.caustic_map, s.splat_sigma_texels, base_time, base_error))
+    rows.append(_row("caustics_mapping", "scene settings", estimator=s.estimator,
+                     iterations=s.iterations, grid=s.grid, caustic_map=s.caustic_map,
+                     splat_sigma=s.splat_sigma_texels, time_s=base_time, relmse=base_error))
     for config in sweep_configs(quick=quick):
         frame, seconds = runner.timed(clock=caustic_seconds, **config)
         error = score_value("relmse", frame.result.receivers[0].irradiance, reference,
                             mask=caustic, exposure=None)
         merged = {"estimator": s.estimator, "iterations": s.iterations, "grid": s.grid,
                   "caustic_map": s.caustic_map, "splat_sigma": s.splat_sigma_texels, **config}
-        rows.append(("caustics_mapping", _label(config), merged["estimator"],
-                     merged["iterations"], merged["grid"], merged["caustic_map"],
-                     merged["splat_sigma"], seconds, error))
+        rows.append(_row("caustics_mapping", _label(config), **merged, time_s=seconds,
+                         relmse=error))
         if progress is not None:
             progress()
     fractions = (64, 16, 4) if quick else (256, 64, 16, 4)
@@ -88,15 +93,18 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
         seconds = estimate.history[-1][2]
         error = score_value("relmse", estimate.caustic[0].irradiance, reference,
                             mask=caustic, exposure=None)
-        rows.append(("reference", f"photons={photons}", "", 0, 0, 0, 0.0, seconds, error))
+        rows.append(_row("reference", f"photons={photons}", estimator="", iterations=0, grid=0,
+                         caustic_map=0, splat_sigma=0.0, time_s=seconds, relmse=error))
         ref_times.append(seconds)
         ref_errors.append(error)
         if progress is not None:
             progress()
     # The caustics-mapping rows come first, so front indices are row indices.
-    realtime = [r for r in rows if r[0] == "caustics_mapping"]
-    front = set(pareto_front([r[7] for r in realtime], [r[8] for r in realtime]).tolist())
-    table = Table(COLUMNS, tuple((*row, i in front) for i, row in enumerate(rows)))
+    realtime = [r for r in rows if r["series"] == "caustics_mapping"]
+    front = set(pareto_front([r["time_s"] for r in realtime],
+                             [r["relmse"] for r in realtime]).tolist())
+    table = Table.from_records(COLUMNS, [{**row, "pareto": i in front}
+                                         for i, row in enumerate(rows)])
     speedup = None
     if base_time > 0 and base_error > 0 and all(e > 0 for e in ref_errors):
         speedup = equal_error_speedup(base_time, base_error, ref_times, ref_errors)

@@ -8,20 +8,19 @@ growing budgets and scoring each against an independent converged seed.
 Equal-error speedup: the time the reference needs to reach the real-time method's
 error, divided by the real-time method's time,
 
-    S = t_ref(e_rt) / t_rt,
+    S = t_ref(e_method) / t_method,
 
 with t_ref(e) interpolated linearly in log-log space between measured budgets. Below
 the smallest measured reference error we extrapolate with the Monte Carlo rate
 relMSE ∝ 1/t (slope -1 in log-log); above the largest we report only the bound
-S ≤ t_ref,min / t_rt. The result says which of the three applied.
+S ≤ t_ref,min / t_method. The result says which of the three applied.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Literal
-
 import numpy as np
+
+from reports.records import EqualErrorSpeedup
 
 __all__ = ["EqualErrorSpeedup", "equal_error_speedup", "pareto_front"]
 
@@ -46,45 +45,26 @@ def pareto_front(times, errors) -> np.ndarray:
     return np.asarray(front, dtype=int)
 
 
-@dataclass(frozen=True)
-class EqualErrorSpeedup:
-    """Equal-error speedup of a real-time point over the reference's curve.
-
-    Attributes
-    ----------
-    speedup : float
-        t_ref(e_rt) / t_rt (an upper bound when ``kind == "bound"``).
-    reference_time : float
-        t_ref(e_rt) in seconds.
-    kind : {"interpolated", "extrapolated", "bound"}
-        How t_ref(e_rt) was obtained (see the module docstring).
-    """
-
-    speedup: float
-    reference_time: float
-    kind: Literal["interpolated", "extrapolated", "bound"]
-
-
-def equal_error_speedup(rt_time: float, rt_error: float, reference_times,
+def equal_error_speedup(method_time: float, method_error: float, reference_times,
                         reference_errors) -> EqualErrorSpeedup:
-    """Equal-error speedup of a real-time point (``rt_time`` s, ``rt_error``) over the
+    """Equal-error speedup of a real-time point (``method_time`` s, ``method_error``) over the
     reference's (time, error) curve. Errors must be positive (relMSE-like)."""
     t = np.asarray(reference_times, float)
     e = np.asarray(reference_errors, float)
     if t.size < 1 or t.shape != e.shape:
         raise ValueError("need at least one reference point with matching times and errors")
-    if not (rt_time > 0 and rt_error > 0 and np.all(t > 0) and np.all(e > 0)):
+    if not (method_time > 0 and method_error > 0 and np.all(t > 0) and np.all(e > 0)):
         raise ValueError("times and errors must be positive")
     # The error of a converging reference falls with time: keep its lower envelope.
     front = pareto_front(t, e)
     t, e = t[front], e[front]
-    if rt_error >= e[0]:
-        return EqualErrorSpeedup(t[0] / rt_time, float(t[0]), "bound")
-    if rt_error < e[-1]:
+    if method_error >= e[0]:
+        return EqualErrorSpeedup(t[0] / method_time, float(t[0]), "bound")
+    if method_error < e[-1]:
         # relMSE ∝ 1/t: t(e) = t_last · e_last / e.
-        t_needed = t[-1] * e[-1] / rt_error
-        return EqualErrorSpeedup(t_needed / rt_time, float(t_needed), "extrapolated")
+        t_needed = t[-1] * e[-1] / method_error
+        return EqualErrorSpeedup(t_needed / method_time, float(t_needed), "extrapolated")
     log_t, log_e = np.log(t), np.log(e)
     # e decreases along the front; np.interp needs increasing x, so reverse.
-    t_needed = float(np.exp(np.interp(np.log(rt_error), log_e[::-1], log_t[::-1])))
-    return EqualErrorSpeedup(t_needed / rt_time, t_needed, "interpolated")
+    t_needed = float(np.exp(np.interp(np.log(method_error), log_e[::-1], log_t[::-1])))
+    return EqualErrorSpeedup(t_needed / method_time, t_needed, "interpolated")

@@ -11,8 +11,10 @@ from __future__ import annotations
 import statistics
 from typing import Any
 
-from harness.geometry import build_geometry
-from harness.scene import Scene, with_settings
+from renderers.caustics_mapping.context import create_context
+from renderers.caustics_mapping.renderer import render_frame
+from scenes import Scene, with_settings
+from scenes.geometry import build_geometry
 
 __all__ = ["CAMERA_PASSES", "RealtimeRunner", "caustic_seconds", "frame_seconds"]
 
@@ -39,7 +41,6 @@ class RealtimeRunner:
     """
 
     def __init__(self, scene: Scene, *, repeats: int = 3):
-        from renderers.caustics_mapping.context import create_context  # noqa: PLC0415
 
         self.scene = scene
         self.geometry = build_geometry(scene)
@@ -55,7 +56,6 @@ class RealtimeRunner:
 
     def render(self, **overrides: Any):
         """One frame (``renderers.caustics_mapping.renderer.Frame``) with overrides."""
-        from renderers.caustics_mapping.renderer import render_frame  # noqa: PLC0415
 
         scene = with_settings(self.scene, overrides) if overrides else self.scene
         return render_frame(scene, ctx=self.ctx, geometry=self.geometry)

@@ -9,12 +9,12 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from harness.geometry import SceneGeometry
-from harness.scene.model import Camera, ConductorMaterial, DielectricMaterial
 from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup, look_at
 from renderers.caustics_mapping.meshes import GpuMesh
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
+from scenes.geometry import SceneGeometry
+from scenes.model import Camera, ConductorMaterial, DielectricMaterial
 
 __all__ = ["CameraInputs", "camera_matrix", "render_camera"]
 

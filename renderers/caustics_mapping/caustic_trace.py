@@ -15,7 +15,6 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from harness.scene.model import ConductorMaterial, DielectricMaterial
 from renderers.caustics_mapping.context import ResourcePool, load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.object_positions import ObjectSurfaces
@@ -25,6 +24,7 @@ from renderers.caustics_mapping.uniforms import (
     set_object_view_uniforms,
     set_uniform,
 )
+from scenes.model import ConductorMaterial, DielectricMaterial
 
 __all__ = ["ESTIMATORS", "STATUS", "MaterialTable", "Trace", "material_table", "run_caustic_trace"]
 

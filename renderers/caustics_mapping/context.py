@@ -16,7 +16,7 @@ from typing import Any
 
 import moderngl
 
-from harness.errors import HarnessError
+from scenes.errors import HarnessError
 
 __all__ = [
     "GLError", "PassTimer", "ResourcePool", "create_context", "load_program", "pool",

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.geometry import SceneGeometry
-from harness.scene.model import AreaLight, DirectionalLight, PointLight, Scene, SpotLight
+from scenes.geometry import SceneGeometry
+from scenes.model import AreaLight, DirectionalLight, PointLight, Scene, SpotLight
 
 __all__ = ["CUBE_FACES", "LightSetup", "LightView", "light_setups"]
 

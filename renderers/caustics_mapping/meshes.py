@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from harness.geometry import TriangleMesh
+from scenes.geometry import TriangleMesh
 
 __all__ = ["GpuMesh", "back_faces_hidden", "upload_mesh"]
 

@@ -2,7 +2,7 @@
 
 The same splats as the caustic map, drawn a second time into one RGBA32F target per
 receiver (``settings.receiver_map`` texels; row 0 at vmin, as
-:class:`harness.results.ReceiverMap` requires): rgb caustic irradiance in W per m²
+:class:`renderers.results.ReceiverMap` requires): rgb caustic irradiance in W per m²
 of receiver surface (flux per (u, v) area divided by the surface area per (u, v)
 area), a = splat weight.
 """
@@ -14,13 +14,13 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from harness.geometry import ReceiverGeometry
 from renderers.caustics_mapping.caustic_splat import record_vertex_array
 from renderers.caustics_mapping.caustic_trace import Trace
 from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.receiver_positions import ReceiverPositions
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
+from scenes.geometry import ReceiverGeometry
 
 __all__ = ["UvMapping", "splat_receiver_map", "uv_mapping"]
 

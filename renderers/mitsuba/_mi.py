@@ -1,6 +1,6 @@
 """The one place that imports Mitsuba and Dr.Jit.
 
-:func:`harness.system.configure_drjit` runs first, so Dr.Jit's LLVM backend finds
+:func:`renderers.mitsuba.llvm.configure_drjit` runs first, so Dr.Jit's LLVM backend finds
 the libLLVM it needs (>= 16) instead of guessing. The variant is ``llvm_ad_rgb``;
 ``scalar_rgb`` is a recorded fallback (the camera image works, the vectorised
 photon tracer refuses to run on it: one photon per Python call is unusable).
@@ -11,8 +11,9 @@ from __future__ import annotations
 import functools
 from types import ModuleType
 
-from harness.errors import HarnessError
-from harness.system import configure_drjit
+from renderers.mitsuba.bsdf import register
+from renderers.mitsuba.llvm import configure_drjit
+from scenes.errors import HarnessError
 
 __all__ = ["FALLBACK_VARIANT", "PREFERRED_VARIANT", "MitsubaError", "load", "versions"]
 
@@ -28,8 +29,10 @@ class MitsubaError(HarnessError, RuntimeError):
 def load() -> tuple[ModuleType, ModuleType, str]:
     """Import Mitsuba and Dr.Jit, select the variant; return ``(mi, dr, variant)``."""
     configure_drjit()
-    import drjit as dr  # noqa: PLC0415
-    import mitsuba as mi  # noqa: PLC0415
+    # Deferred: Dr.Jit reads DRJIT_LIBLLVM_PATH when imported, and the CLI must start
+    # without loading either library.
+    import drjit as dr  # noqa: PLC0415 - heavy; needs DRJIT_LIBLLVM_PATH set first
+    import mitsuba as mi  # noqa: PLC0415 - heavy; needs DRJIT_LIBLLVM_PATH set first
 
     try:
         mi.set_variant(PREFERRED_VARIANT)
@@ -37,7 +40,6 @@ def load() -> tuple[ModuleType, ModuleType, str]:
     except (ImportError, AttributeError, RuntimeError):
         mi.set_variant(FALLBACK_VARIANT)
         variant = FALLBACK_VARIANT
-    from renderers.mitsuba.bsdf import register  # noqa: PLC0415
 
     register(mi, dr)
     return mi, dr, variant

@@ -26,10 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.exr import ExrError, atomic_write_bytes, read_exr, write_exr
-from harness.geometry import build_geometry
-from harness.results import ReceiverMap, RenderResult
-from harness.scene.model import Scene
+from renderers.exr import ExrError, read_exr, write_exr
+from renderers.results import ReceiverMap, RenderResult
+from scenes.files import atomic_write_bytes
+from scenes.geometry import build_geometry
+from scenes.model import Scene
 
 __all__ = ["FORMAT_VERSION", "cache_dir", "cache_key", "entry_lock", "load_entry",
            "read_result_dir", "receiver_file_name", "write_result_dir"]

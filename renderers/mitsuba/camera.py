@@ -21,12 +21,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.geometry import SceneGeometry, build_geometry
-from harness.scene import effects_of, event_chain
-from harness.scene.model import Scene
 from renderers.mitsuba import _mi
 from renderers.mitsuba.exporter import export_scene, sensor_dict
 from renderers.mitsuba.photons import MAX_SPECULAR_EVENTS
+from scenes import effects_of, event_chain
+from scenes.geometry import SceneGeometry, build_geometry
+from scenes.model import Scene
 
 __all__ = ["CAMERA_LIMITS", "camera_max_depth", "render_camera"]
 

@@ -43,10 +43,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.geometry import TriangleMesh
-from harness.scene.model import AreaLight, DirectionalLight, PointLight, SpotLight
 from renderers.mitsuba import _mi
 from renderers.mitsuba.exporter import area_light_frame
+from scenes.geometry import TriangleMesh
+from scenes.model import AreaLight, DirectionalLight, PointLight, SpotLight
 
 __all__ = ["Target", "bounding_sphere", "sample_photons", "stratified_square"]
 

@@ -1,7 +1,7 @@
 """Scene -> Mitsuba: the same triangles and normals the GPU renderer gets.
 
 Every receiver and caustic object becomes an ``mi.Mesh`` built from
-:func:`harness.geometry.build_geometry` (positions, vertex normals, faces, and the
+:func:`scenes.geometry.build_geometry` (positions, vertex normals, faces, and the
 receiver's (u, v) as texture coordinates), so both renderers intersect identical
 triangles and shade with identical normals. Units stay SI: point and spot lights
 carry intensity in W/sr, directional lights irradiance in W/m², area lights
@@ -22,8 +22,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.geometry import SceneGeometry, TriangleMesh, build_geometry
-from harness.scene.model import (
+from renderers.mitsuba import _mi
+from renderers.mitsuba.bsdf import BSDF_NAME
+from scenes.geometry import SceneGeometry, TriangleMesh, build_geometry
+from scenes.model import (
     AreaLight,
     Camera,
     ConductorMaterial,
@@ -34,8 +36,6 @@ from harness.scene.model import (
     Scene,
     SpotLight,
 )
-from renderers.mitsuba import _mi
-from renderers.mitsuba.bsdf import BSDF_NAME
 
 __all__ = [
     "ExportedScene",

@@ -12,34 +12,37 @@ from __future__ import annotations
 
 import time
 from contextlib import nullcontext
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
-from harness.geometry import build_geometry
-from harness.results import ReceiverMap, RenderResult
-from harness.scene import effects_of
-from harness.scene.model import Scene
 from renderers.mitsuba import _mi
 from renderers.mitsuba.cache import cache_dir, cache_key, entry_lock, load_entry, write_result_dir
 from renderers.mitsuba.camera import CAMERA_LIMITS, camera_max_depth, render_camera
 from renderers.mitsuba.noise import caustic_region, relative_noise, seed_statistics
 from renderers.mitsuba.photons import DEFAULT_BATCH, PhotonTracer, event_chains_counted
+from renderers.results import ReceiverMap, RenderResult
+from scenes import effects_of
+from scenes.geometry import build_geometry
+from scenes.model import Scene
 
 __all__ = ["ReceiverEstimate", "estimate_receivers", "render_reference"]
 
 TIMER = "time.perf_counter (wall clock, includes JIT compilation)"
 
 
+@dataclass(frozen=True, eq=False)
 class ReceiverEstimate:
     """Photon-traced receiver maps with their noise (see :func:`estimate_receivers`).
 
     Attributes
     ----------
-    maps : list of ReceiverMap, or None
+    maps : tuple of ReceiverMap, or None
         Mean total irradiance (direct light and the counted chains; W/m², (H, W, 3),
         row 0 at vmin) and its variance of the mean. None with ``caustic_only``.
-    caustic : list of ReceiverMap
+    caustic : tuple of ReceiverMap
         Mean caustic irradiance (the counted chains only, no direct light: what the
         radiometric contract calls the receiver map), with its variance of the mean.
     photons : int
@@ -48,17 +51,30 @@ class ReceiverEstimate:
         Largest RMS relative standard error over the receivers' caustic regions.
     stopped_by : str
         ``"target_noise"`` or ``"budget"``.
-    history : list of (photons per seed, relative noise, seconds)
+    history : tuple of (int, float, float)
+        (photons per seed, relative noise, seconds) after each round.
+    seeds : int
+        Independent seeds K.
+    seed : int
+        The first seed.
+    channel_passes : int
+        Photon-tracer passes per seed: 1, or 3 with dispersion (one per channel).
     """
 
-    def __init__(self, **fields) -> None:
-        self.__dict__.update(fields)
+    maps: tuple[ReceiverMap, ...] | None
+    caustic: tuple[ReceiverMap, ...]
+    photons: int
+    relative_noise: float
+    stopped_by: str
+    history: tuple[tuple[int, float, float], ...]
+    seeds: int
+    seed: int
+    channel_passes: int
 
 
 def _progress(total: int, desc: str, enabled: bool):
     if not enabled:
         return nullcontext(None)
-    from tqdm import tqdm  # noqa: PLC0415
 
     return tqdm(total=total, desc=desc, unit="photon", unit_scale=True, leave=False)
 
@@ -120,9 +136,9 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
             if np.isfinite(noise) and noise <= target:
                 stopped = "target_noise"
                 break
-    return ReceiverEstimate(maps=None if caustic_only else maps, caustic=caustic,
+    return ReceiverEstimate(maps=None if caustic_only else tuple(maps), caustic=tuple(caustic),
                             photons=traced, relative_noise=noise, stopped_by=stopped,
-                            history=history, seeds=k, seed=first,
+                            history=tuple(history), seeds=k, seed=first,
                             channel_passes=len(tracer.channels))
 
 
@@ -139,7 +155,6 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> Render
     seeds = range(s.seed, s.seed + s.seeds)
     iterator = seeds
     if progress:
-        from tqdm import tqdm  # noqa: PLC0415
 
         iterator = tqdm(seeds, desc=f"camera ({s.spp} spp per seed)", unit="seed", leave=False)
     for seed in iterator:

@@ -1,7 +1,7 @@
 /* caustics-harness report: exposure control and A/B comparison for HDR images.
  *
  * Hand-written, no dependencies, no network. The HDR previews arrive as data: URIs
- * in window.causticsHdr[view][layer] (layer "test" or "reference"), each an RGB PNG
+ * in window.causticsHdr[view][layer] (layer "method" or "reference"), each an RGB PNG
  * holding Ward's RGBE encoding in two stacked halves (reports/images.py):
  *   rows 0..H-1  : mantissas R, G, B       rows H..2H-1 : shared exponent E
  *   value = (byte + 0.5) * 2^(E - 136), and 0 where E = 0.
@@ -70,7 +70,7 @@
     }
     const white = parseFloat(section.dataset.white);
     const layers = {};
-    for (const layer of ["test", "reference"]) {
+    for (const layer of ["method", "reference"]) {
       layers[layer] = await decodeRgbe(sources[layer]);
     }
     const ab = section.querySelector("canvas.ab");
@@ -81,7 +81,7 @@
       if (!ab) {
         return;
       }
-      const a = toned.test, b = toned.reference;
+      const a = toned.method, b = toned.reference;
       const cut = Math.round(a.width * parseFloat(split.value) / 100);
       const mixed = new ImageData(new Uint8ClampedArray(b.data), b.width, b.height);
       for (let y = 0; y < a.height; y++) {
@@ -94,7 +94,7 @@
 
     function render() {
       const k = Math.pow(2, parseFloat(exposure.value)) / white;
-      for (const layer of ["test", "reference"]) {
+      for (const layer of ["method", "reference"]) {
         toned[layer] = toneMap(layers[layer], k);
         section.querySelectorAll('canvas.hdr[data-layer="' + layer + '"]').forEach(
           (canvas) => paint(canvas, toned[layer]));

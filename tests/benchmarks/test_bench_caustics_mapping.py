@@ -20,8 +20,8 @@ import time
 import numpy as np
 import pytest
 
-from harness.scene import load_scene, with_settings
 from renderers.caustics_mapping import render
+from scenes import load_scene, with_settings
 
 from ..renderers.caustics_mapping.conftest import ROOT
 

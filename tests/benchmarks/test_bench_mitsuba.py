@@ -10,9 +10,9 @@ import time
 
 import pytest
 
-from harness.scene import load_scene
 from renderers.mitsuba.photons import PhotonTracer
 from renderers.mitsuba.reference import estimate_receivers
+from scenes import load_scene
 
 pytestmark = pytest.mark.bench
 

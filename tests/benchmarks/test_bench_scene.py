@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import pytest
 
-from harness.geometry.build import _object, _receiver
-from harness.scene import load_scene
+from scenes import load_scene
+from scenes.geometry.build import _object, _receiver
 from tests.conftest import SCENES
 
 pytestmark = pytest.mark.bench

@@ -6,7 +6,10 @@ import json
 import subprocess
 import sys
 
-from harness.cli import default_scene_path, main
+import pytest
+
+from harness.cli import main
+from scenes import SceneError, default_scene_path, resolve_scene
 from tests.conftest import REPO, SCENES, all_scene_files
 
 
@@ -62,9 +65,64 @@ def test_no_traceback_in_a_real_process(tmp_path):
     assert proc.stderr.startswith(f"error: {bad}: TOML syntax error")
 
 
-def test_default_scene_is_glass_sphere_verbatim():
-    """The embedded default scene is the committed glass_sphere scene, byte for byte."""
-    assert default_scene_path().read_bytes() == (SCENES / "glass_sphere.toml").read_bytes()
+def test_default_scene_is_the_bundled_glass_sphere(capsys):
+    """The default scene is the bundled glass_sphere file itself, not a copy of it."""
+    assert default_scene_path().resolve() == (SCENES / "glass_sphere.toml").resolve()
+    assert main(["validate"]) == 0
+    assert "[glass_sphere]" in capsys.readouterr().out
+
+
+def test_bundled_scenes_resolve_by_name_and_unknown_names_list_them(tmp_path, monkeypatch):
+    """A bare name finds the bundled file from any directory; a path still wins; an
+    unknown name is one SceneError that lists the bundled names."""
+    monkeypatch.chdir(tmp_path)
+    assert resolve_scene("bunny") == SCENES / "bunny.toml"
+    assert resolve_scene("hard/tiny_scale") == SCENES / "hard" / "tiny_scale.toml"
+    assert resolve_scene("tiny_scale") == SCENES / "hard" / "tiny_scale.toml"
+    local = tmp_path / "bunny"
+    local.write_text("")
+    assert resolve_scene("bunny").resolve() == local
+    with pytest.raises(SceneError) as info:
+        resolve_scene("../scenes/bunny")
+    assert "no bundled scene" in str(info.value) and "glass_sphere" in str(info.value)
+
+
+# Blocks the heavy libraries in a fresh interpreter: importing any of them raises.
+_BLOCKED = """
+import sys
+BLOCKED = ("mitsuba", "drjit", "moderngl", "matplotlib", "playwright")
+class Block:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in BLOCKED:
+            raise ImportError(f"{name} is blocked in this test")
+sys.meta_path.insert(0, Block())
+from harness.cli import main
+code = main(sys.argv[1:])
+loaded = sorted(m for m in sys.modules if m.split(".")[0] in BLOCKED)
+print("loaded:", loaded)
+sys.exit(code)
+"""
+
+
+@pytest.mark.parametrize("argv", [["validate", "glass_sphere", "hard/grazing_light"],
+                                  ["describe", "water_pool"], ["schema"]])
+def test_scene_commands_run_from_tmp_without_heavy_libraries(tmp_path, argv):
+    """From an unrelated directory, with mitsuba, drjit, moderngl, matplotlib and
+    playwright unimportable, the scene commands still work and load none of them."""
+    proc = subprocess.run([sys.executable, "-c", _BLOCKED, *argv], capture_output=True,
+                          text=True, cwd=tmp_path, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert "loaded: []" in proc.stdout
+
+
+def test_help_loads_no_handler_module(tmp_path):
+    """`caustics --help` builds the parser only: no command module, no heavy library."""
+    script = ("import sys\nfrom harness.cli import build_parser\nbuild_parser()\n"
+              "print(sorted(m for m in sys.modules if m.startswith(('harness.commands', "
+              "'renderers', 'reports', 'mitsuba', 'drjit', 'moderngl', 'matplotlib'))))")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          cwd=tmp_path, check=True)
+    assert proc.stdout.strip() == "[]"
 
 
 def test_describe_default_scene(capsys):

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.geometry import build_geometry
 from harness.raycast import cast_rays
-from harness.scene import load_scene
+from scenes import load_scene
+from scenes.geometry import build_geometry
 from tests.conftest import SCENES
 
 

@@ -8,9 +8,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from harness.scene import load_scene, parse_scene, with_settings
 from renderers.caustics_mapping import render
 from renderers.mitsuba.reference import estimate_receivers
+from scenes import load_scene, parse_scene, with_settings
 from tests.conftest import SCENES
 
 RAMP_SCENE = """

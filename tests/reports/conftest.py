@@ -1,6 +1,6 @@
 """Realistic :class:`SceneComparison` records built from synthetic images, without the
 renderers: a Gaussian caustic blob on a dim receiver plus noise is the "reference",
-the same blob shifted and scaled is the "test", and every value and map comes from
+the same blob shifted and scaled is the "method", and every value and map comes from
 the real metric functions of ``harness.metrics`` and ``harness.studies.pareto``."""
 
 from __future__ import annotations
@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from harness.compare.records import MetricValue, SceneComparison, Table, ThresholdCheck
 from harness.metrics import (
     flip_error,
     flux_ratio,
@@ -26,6 +25,7 @@ from harness.metrics import (
 )
 from harness.studies.pareto import equal_error_speedup, pareto_front
 from reports import images
+from reports.records import MetricValue, SceneComparison, Table, ThresholdCheck
 
 #: Markup that must render as text: a script, an event handler, a closing tag.
 HOSTILE_NAME = '<script>window.__pwned = 1</script><b>bold</b>/../x'
@@ -48,13 +48,13 @@ def caustic_blob(shape, *, centre, sigma, peak, rng, noise=0.0, background=0.05)
 
 def _view(prefix, shape, rng, *, shift, scale, object_mask=False):
     """Images and metrics of one view: reference, an independent reference seed
-    (for the noise floor) and the shifted, scaled test."""
+    (for the noise floor) and the shifted, scaled method."""
     h, w = shape
     centre = (h * 0.55, w * 0.45)
     sigma = min(h, w) / 9
     reference = caustic_blob(shape, centre=centre, sigma=sigma, peak=8.0, rng=rng, noise=0.05)
     seed2 = caustic_blob(shape, centre=centre, sigma=sigma, peak=8.0, rng=rng, noise=0.05)
-    test = caustic_blob(shape, centre=(centre[0] + shift, centre[1] - shift),
+    method = caustic_blob(shape, centre=(centre[0] + shift, centre[1] - shift),
                         sigma=sigma * scale, peak=8.0 / scale**2, rng=rng)
     caustic = reference.mean(axis=-1) > 1.0
     obj = None
@@ -63,11 +63,11 @@ def _view(prefix, shape, rng, *, shift, scale, object_mask=False):
         obj = (x - w * 0.5) ** 2 + (y - h * 0.3) ** 2 < (min(h, w) * 0.12) ** 2
     white = white_point(reference)
     start, stop = -4.0, 2.0
-    _, ssim_map = structural_similarity(test, reference, white=white, return_map=True)
-    flip, flip_map = flip_error(test, reference, start_exposure=start, stop_exposure=stop,
+    _, ssim_map = structural_similarity(method, reference, white=white, return_map=True)
+    flip, flip_map = flip_error(method, reference, start_exposure=start, stop_exposure=stop,
                                 return_map=True)
-    signed = signed_difference(test, reference).astype(np.float32)
-    images = {f"{prefix}/test": test, f"{prefix}/reference": reference,
+    signed = signed_difference(method, reference).astype(np.float32)
+    images = {f"{prefix}/method": method, f"{prefix}/reference": reference,
               f"{prefix}/signed": signed, f"{prefix}/ssim": ssim_map.astype(np.float32),
               f"{prefix}/flip": flip_map.astype(np.float32), f"{prefix}/mask_caustic": caustic}
     if obj is not None:
@@ -84,7 +84,7 @@ def _view(prefix, shape, rng, *, shift, scale, object_mask=False):
             "flux_ratio": lambda a, b, m=mask: flux_ratio(a, b, mask=m),
         }
         for metric, function in pairs.items():
-            metrics.append(MetricValue(prefix, region, metric, function(test, reference),
+            metrics.append(MetricValue(prefix, region, metric, function(method, reference),
                                        function(seed2, reference)))
     metrics.append(MetricValue(prefix, "full", "flip", flip, flip_error(
         seed2, reference, start_exposure=start, stop_exposure=stop)))
@@ -136,10 +136,10 @@ def make_comparison(*, name: str = "glass_sphere",
     rec_images, rec_metrics, rec_white, rec_range = _view(
         "receiver0", receiver, rng, shift=2, scale=0.9)
     metrics = tuple(cam_metrics + rec_metrics)
-    cost, rt_time, rt_error = cost_table(rng)
-    reference = [row for row in cost.rows if row[0] == "reference"]
-    speedup = equal_error_speedup(rt_time, rt_error, [r[7] for r in reference],
-                                  [r[8] for r in reference])
+    cost, method_time, method_error = cost_table(rng)
+    reference = [row for row in cost.records() if row["series"] == "reference"]
+    speedup = equal_error_speedup(method_time, method_error, [r["time_s"] for r in reference],
+                                  [r["relmse"] for r in reference])
     checks = ()
     if thresholds:
         ssim = next(m for m in metrics if (m.view, m.region, m.metric)
@@ -164,7 +164,7 @@ def make_comparison(*, name: str = "glass_sphere",
                   "flip_start": -4.0, "flip_stop": 2.0,
                   "diff_range": {"camera": cam_range, "receiver0": rec_range}},
         convergence=convergence_table(rng),
-        cost=cost, speedup=speedup, speedup_point=(rt_time, rt_error),
+        cost=cost, speedup=speedup, speedup_point=(method_time, method_error),
         claims={"one iteration is enough for rendering": "holds: relMSE 0.012 at iteration 1",
                 "error negligible after five iterations": "holds: mean error 0.02 texels"},
         provenance={"passes": ["receiver_positions", "object_front", "object_back",
@@ -172,10 +172,10 @@ def make_comparison(*, name: str = "glass_sphere",
                     "event_chains": ["L T T D"], "photons": 10_000_000, "spp": 1024,
                     "seeds": [1, 2, 3, 4], "versions": {"mitsuba": "3.9.0", "drjit": "1.5.0"},
                     "timings_s": {"caustics_mapping": 0.012, "reference": 42.0},
-                    "timer": "ctx.finish + perf_counter", "machine": "test fixture",
+                    "timer": "ctx.finish + perf_counter", "machine": "method fixture",
                     "reference_cache_hit": True},
-        files={"camera/test": "camera_cm.exr", "camera/reference": "camera_ref.exr",
-               "receiver0/test": "receiver0_cm.exr"},
+        files={"camera/method": "camera_cm.exr", "camera/reference": "camera_ref.exr",
+               "receiver0/method": "receiver0_cm.exr"},
         thresholds=checks,
         stability={"hard_cases": 3, "nan_or_inf": 0, "lost_splats": 12, "outcome": "pass"},
     )
@@ -184,9 +184,9 @@ def make_comparison(*, name: str = "glass_sphere",
 def hdr_uris(scene_dir: Path) -> dict[str, dict[str, str]]:
     """The HDR preview data: URIs a linked scene folder ships in ``hdr.js``."""
     text = (scene_dir / "hdr.js").read_text("utf-8")
-    found = re.findall(r'window\.causticsHdr\["(\w+)"\] = \{"test": "([^"]+)", '
+    found = re.findall(r'window\.causticsHdr\["(\w+)"\] = \{"method": "([^"]+)", '
                        r'"reference": "([^"]+)"\};', text)
-    return {view: {"test": t, "reference": r} for view, t, r in found}
+    return {view: {"method": t, "reference": r} for view, t, r in found}
 
 
 def decode_uri(uri: str) -> np.ndarray:

@@ -3,8 +3,8 @@ Playwright, on file:// pages, linked and self-contained.
 
 Skipped with the reason when ``/usr/bin/chromium`` or ``playwright`` is missing,
 except under CI (``CI`` set), where a missing browser is a failure: ``python -m
-harness.system`` installs chromium there and the ``test`` extra installs playwright.
-Screenshots are written to ``test-artifacts/`` at the repository root.
+harness.system`` installs chromium there and the ``method`` extra installs playwright.
+Screenshots are written to ``method-artifacts/`` at the repository root.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from tests.conftest import REPO
 from tests.reports.conftest import HOSTILE_DESCRIPTION, HOSTILE_NAME, decode_uri, hdr_uris
 
 CHROMIUM = Path("/usr/bin/chromium")
-ARTIFACTS = REPO / "test-artifacts"
+ARTIFACTS = REPO / "method-artifacts"
 CHROMIUM_ARGS = [
     "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
     "--disable-background-networking", "--disable-component-update", "--disable-sync",
@@ -35,7 +35,7 @@ def _missing() -> str | None:
         return (f"{CHROMIUM} not found: install Debian's chromium (as root: "
                 "python -m harness.system, or apt-get install -y chromium)")
     if importlib.util.find_spec("playwright") is None:
-        return "the playwright package is missing: pip install -e .[test]"
+        return "the playwright package is missing: pip install -e .[method]"
     return None
 
 
@@ -143,14 +143,14 @@ def _set_range(page, selector: str, value: float) -> None:
 def test_scene_page_in_chromium(browser, reports, comparison, mode):
     """Loads with no console error and no failed or external request; every image
     decodes; the exposure slider brightens the HDR canvases; the A/B slider and the
-    pointer swap test and reference; a screenshot is saved."""
+    pointer swap method and reference; a screenshot is saved."""
     start = time.perf_counter()
     page, log = _open(browser, reports[mode] / "glass_sphere" / "index.html")
     _wait_ready(page)
     count = _assert_images_decode(page)
     assert count >= 8  # 3 maps + 3 colour bars per view, regions, 2 plots
 
-    test_canvas = '#view-camera canvas.hdr[data-layer="test"]'
+    test_canvas = '#view-camera canvas.hdr[data-layer="method"]'
     before = _canvas(page, test_canvas)
     shot_before = page.locator(test_canvas).screenshot()
     _set_range(page, "#exposure", 2)
@@ -191,7 +191,7 @@ def test_scene_page_in_chromium(browser, reports, comparison, mode):
 
 def test_canvas_tone_map_matches_the_metrics_tone_map(browser, reports, comparison):
     """At exposure 0 the page's JavaScript tone curve gives the same 8-bit pixels as
-    ``harness.metrics.tonemap`` on the shipped data (within one level), for the
+    ``reports.display`` on the shipped data (within one level), for the
     camera image and the (flipped) receiver map: no colour management, no alpha
     premultiplication, no drift between the two implementations."""
     root = reports["linked"] / "glass_sphere"
@@ -200,7 +200,7 @@ def test_canvas_tone_map_matches_the_metrics_tone_map(browser, reports, comparis
     uris = hdr_uris(root)
     for view in ("camera", "receiver0"):
         white = float(page.locator(f"#view-{view}").get_attribute("data-white"))
-        for layer in ("test", "reference"):
+        for layer in ("method", "reference"):
             expected = np.round(tonemap(decode_uri(uris[view][layer]), white=white) * 255)
             shown = _canvas(page, f'#view-{view} canvas.hdr[data-layer="{layer}"]')
             assert np.all(shown[..., 3] == 255)

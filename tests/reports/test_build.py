@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.compare.records import METRIC_FORMULAS
 from reports import build_report, scene_folder
+from reports.records import METRIC_FORMULAS
 from tests.reports.conftest import HOSTILE_NAME, decode_uri, hdr_uris
 
 
@@ -61,7 +61,7 @@ def test_layout_of_a_linked_report(linked, comparison):
     assert {p.name for p in (linked / "_static").iterdir()} == {"report.css", "report.js"}
     scene = linked / "glass_sphere"
     for name in ("index.html", "hdr.js", "convergence.svg", "cost_accuracy.svg",
-                 "camera_signed.png", "receiver0_flip.png", "thumbnail_test.png"):
+                 "camera_signed.png", "receiver0_flip.png", "thumbnail_method.png"):
         assert (scene / name).is_file(), name
     folders = sorted(p.name for p in linked.iterdir() if p.is_dir())
     assert folders == sorted(["_static", "glass_sphere", scene_folder(HOSTILE_NAME)])
@@ -137,7 +137,7 @@ def test_provenance_settings_and_claims_are_shown(linked, comparison):
 def test_exr_links_are_relative_and_flag_missing_files(tmp_path, comparison):
     """Links resolve from the scene page; a missing original is marked; a path that
     leaves the scene folder is not linked."""
-    c = replace(comparison, files={"camera/test": "camera_cm.exr",
+    c = replace(comparison, files={"camera/method": "camera_cm.exr",
                                    "camera/reference": "../../escape.exr"})
     (tmp_path / "glass_sphere").mkdir()
     (tmp_path / "glass_sphere" / "camera_cm.exr").write_bytes(b"x")
@@ -145,7 +145,7 @@ def test_exr_links_are_relative_and_flag_missing_files(tmp_path, comparison):
     html = (tmp_path / "glass_sphere" / "index.html").read_text("utf-8")
     assert '<a href="camera_cm.exr">camera_cm.exr</a></li>' in html
     assert 'href="../../escape.exr"' not in html and "not linked" in html
-    build_report(tmp_path, [replace(c, files={"camera/test": "gone.exr"})])
+    build_report(tmp_path, [replace(c, files={"camera/method": "gone.exr"})])
     assert "not found beside this page" in (tmp_path / "glass_sphere" / "index.html").read_text()
 
 
@@ -155,7 +155,7 @@ def test_hdr_previews_decode_to_the_images_receivers_flipped(linked, comparison)
     uris = hdr_uris(linked / "glass_sphere")
     assert set(uris) == {"camera", "receiver0"}
     for view, flip in (("camera", False), ("receiver0", True)):
-        for layer in ("test", "reference"):
+        for layer in ("method", "reference"):
             expected = np.asarray(comparison.images[f"{view}/{layer}"], np.float64)
             expected = expected[::-1] if flip else expected
             decoded = decode_uri(uris[view][layer])
@@ -168,7 +168,7 @@ def test_large_images_are_downsampled_and_the_page_says_so(tmp_path, comparison_
     build_report(tmp_path, [c], preview_size=128)
     html = (tmp_path / "glass_sphere" / "index.html").read_text("utf-8")
     assert "box-filtered down 4×" in html
-    camera = decode_uri(hdr_uris(tmp_path / "glass_sphere")["camera"]["test"])
+    camera = decode_uri(hdr_uris(tmp_path / "glass_sphere")["camera"]["method"])
     assert camera.shape == (75, 100, 3)
 
 
@@ -195,7 +195,7 @@ def test_optional_parts_may_be_missing(tmp_path, comparison):
 
 
 def test_bad_image_key_is_refused(tmp_path, comparison):
-    c = replace(comparison, images={"../evil/test": np.zeros((2, 2, 3))})
+    c = replace(comparison, images={"../evil/method": np.zeros((2, 2, 3))})
     with pytest.raises(ValueError, match="image keys"):
         build_report(tmp_path, [c])
 

@@ -9,17 +9,17 @@ from harness.compare.evaluate import exposure_for, score_view
 
 
 def test_scores_and_noise_floor():
-    """The test image is the reference scaled by 1.2; the independent reference
+    """The method image is the reference scaled by 1.2; the independent reference
     differs by small noise. Then the flux ratio is 1.2 and its floor ≈ 1, and every
     error metric is worse than its floor."""
     rng = np.random.default_rng(5)
     y, x = np.mgrid[0:48, 0:48]
     ref = np.repeat((0.1 + 3 * np.exp(-((x - 24) ** 2 + (y - 24) ** 2) / 50.0))[..., None], 3, 2)
     independent = ref * (1 + rng.normal(0, 0.01, ref.shape))
-    test = ref * 1.2
+    method = ref * 1.2
     regions = {"full": np.ones((48, 48), bool), "caustic": ref[..., 0] > 0.5,
                "empty": np.zeros((48, 48), bool)}
-    values, maps = score_view("receiver0", test, ref, independent, regions=regions,
+    values, maps = score_view("receiver0", method, ref, independent, regions=regions,
                               exposure=exposure_for(ref))
     by_key = {(v.region, v.metric): v for v in values}
     assert {r for r, _ in by_key} == {"full", "caustic"}  # empty regions are skipped

@@ -8,8 +8,8 @@ import json
 import numpy as np
 
 from harness.compare.outputs import write_comparison
-from harness.compare.records import MetricValue, SceneComparison, Table
-from harness.exr import read_exr
+from renderers.exr import read_exr
+from reports.records import MetricValue, SceneComparison, Table
 
 
 def test_write_comparison_round_trip(tmp_path):
@@ -17,10 +17,10 @@ def test_write_comparison_round_trip(tmp_path):
     comparison = SceneComparison(
         name="s", description="d", source="s.toml", effects=("shadows",), settings={"grid": 8},
         metrics=(MetricValue("camera", "full", "psnr", float("inf"), float("nan")),),
-        images={"camera/test": image, "camera/ssim": image[..., 0]},
+        images={"camera/method": image, "camera/ssim": image[..., 0]},
         exposure={"white": 1.0},
         convergence=Table(("estimator", "iteration"), (("modified", 0), ("modified", 1))),
-        files={"camera/test": "camera_cm.exr", "camera/ssim": "camera_ssim.exr"},
+        files={"camera/method": "camera_cm.exr", "camera/ssim": "camera_ssim.exr"},
     )
     write_comparison(tmp_path, comparison)
     data = json.loads((tmp_path / "metrics.json").read_text())  # strict JSON parses

@@ -8,8 +8,8 @@ import numpy as np
 
 from harness.compare.pipeline import _camera_is_blind
 from harness.compare.regions import caustic_region, object_mask
-from harness.geometry import build_geometry
-from harness.scene import load_scene
+from scenes import load_scene
+from scenes.geometry import build_geometry
 from tests.conftest import SCENES
 
 
@@ -41,9 +41,9 @@ def test_blind_reference_camera_is_detected():
     that is lit is 'blind' (ptracer under water), even with a few stray particles; a
     sparse but unbiased one (most pixels black, as at 2 spp) is not."""
     rng = np.random.default_rng(3)
-    test = np.ones((32, 32, 3))
+    method = np.ones((32, 32, 3))
     stray = np.zeros((32, 32, 3))
     stray[0, :5] = 5.0                     # 25 of 1024 energy units: 2.4 %
     sparse = rng.poisson(0.4, (32, 32, 1)).repeat(3, axis=2) / 0.4   # 67 % black
-    assert _camera_is_blind(stray, test)
-    assert not _camera_is_blind(sparse, test)
+    assert _camera_is_blind(stray, method)
+    assert not _camera_is_blind(sparse, method)

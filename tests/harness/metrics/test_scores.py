@@ -39,25 +39,25 @@ def test_identical_images(reference):
 
 
 def test_constant_offset_hand_computed():
-    """ref = 1, test = 1.1: relMSE = 0.1² / (1² + 0.01) = 0.00990099...;
+    """ref = 1, method = 1.1: relMSE = 0.1² / (1² + 0.01) = 0.00990099...;
     PSNR = 10 log10(1 / 0.01) = 20 dB; flux ratio 1.1."""
     ref = np.ones((8, 8, 3))
-    test = ref + 0.1
-    assert relative_mse(test, ref) == pytest.approx(0.01 / 1.01, rel=1e-12)
-    assert peak_signal_to_noise_ratio(test, ref) == pytest.approx(20.0, rel=1e-12)
-    assert flux_ratio(test, ref) == pytest.approx(1.1, rel=1e-12)
-    np.testing.assert_allclose(signed_difference(test, ref), 0.1)
-    np.testing.assert_allclose(relative_difference(test, ref), 0.1 / 1.01)
+    method = ref + 0.1
+    assert relative_mse(method, ref) == pytest.approx(0.01 / 1.01, rel=1e-12)
+    assert peak_signal_to_noise_ratio(method, ref) == pytest.approx(20.0, rel=1e-12)
+    assert flux_ratio(method, ref) == pytest.approx(1.1, rel=1e-12)
+    np.testing.assert_allclose(signed_difference(method, ref), 0.1)
+    np.testing.assert_allclose(relative_difference(method, ref), 0.1 / 1.01)
 
 
 def test_trimmed_relmse_drops_outliers():
     """One firefly of 100 among 10 000 values: trimming 0.1 % (10 values) removes it;
     untrimmed it contributes 100² / 1.01 / 30 000 per channel mean."""
     ref = np.ones((100, 100, 1)).repeat(3, axis=2)
-    test = ref.copy()
-    test[5, 7, :] = 101.0
-    assert relative_mse(test, ref, trim=0.001) == 0.0
-    assert relative_mse(test, ref) == pytest.approx(3 * 100.0**2 / 1.01 / 30_000)
+    method = ref.copy()
+    method[5, 7, :] = 101.0
+    assert relative_mse(method, ref, trim=0.001) == 0.0
+    assert relative_mse(method, ref) == pytest.approx(3 * 100.0**2 / 1.01 / 30_000)
 
 
 def test_one_pixel_shift(reference):
@@ -74,34 +74,34 @@ def test_one_pixel_shift(reference):
 
 
 def test_noise_of_known_variance():
-    """test = ref + N(0, σ²) on ref = 1: E[relMSE] = σ² / 1.01 and
+    """method = ref + N(0, σ²) on ref = 1: E[relMSE] = σ² / 1.01 and
     E[PSNR] = 10 log10(1/σ²). With 3·256² = 196 608 samples the relative standard
     error of the mean of χ²₁ terms is √(2/196 608) = 0.32 %; 2 % is > 6 SE."""
     rng = np.random.default_rng(1234)
     sigma = 0.05
     ref = np.ones((256, 256, 3))
-    test = ref + rng.normal(0.0, sigma, ref.shape)
-    assert relative_mse(test, ref) == pytest.approx(sigma**2 / 1.01, rel=0.02)
-    assert peak_signal_to_noise_ratio(test, ref) == pytest.approx(
+    method = ref + rng.normal(0.0, sigma, ref.shape)
+    assert relative_mse(method, ref) == pytest.approx(sigma**2 / 1.01, rel=0.02)
+    assert peak_signal_to_noise_ratio(method, ref) == pytest.approx(
         10 * np.log10(1 / sigma**2), abs=0.1)
 
 
 def test_masks_restrict_the_score(reference):
     """Errors outside the mask do not count."""
-    test = reference.copy()
-    test[:10] += 5.0
+    method = reference.copy()
+    method[:10] += 5.0
     mask = np.zeros(reference.shape[:2], bool)
     mask[20:] = True
-    assert relative_mse(test, reference, mask=mask) == 0.0
-    assert relative_mse(test, reference) > 0.0
+    assert relative_mse(method, reference, mask=mask) == 0.0
+    assert relative_mse(method, reference) > 0.0
 
 
 def test_ssim_uses_tonemapped_images(reference):
     """Scaling both images by 1000 changes nothing when the white point scales too:
     SSIM is computed on tone-mapped values, never on linear HDR."""
-    test = reference * 1.2
-    a = structural_similarity(test, reference, white=white_point(reference))
-    b = structural_similarity(test * 1000, reference * 1000, white=white_point(reference * 1000))
+    method = reference * 1.2
+    a = structural_similarity(method, reference, white=white_point(reference))
+    b = structural_similarity(method * 1000, reference * 1000, white=white_point(reference * 1000))
     assert a == pytest.approx(b, abs=1e-9)
     mapped = tonemap(reference * 1e6, white=1.0)
     assert mapped.max() <= 1.0 and mapped.min() >= 0.0

@@ -9,9 +9,9 @@ import itertools
 import numpy as np
 import pytest
 
-from harness.scene import load_scene, with_settings
 from harness.studies.convergence_study import CONFIGS, convergence_study
 from harness.studies.runner import RealtimeRunner
+from scenes import load_scene, with_settings
 from tests.conftest import SCENES
 
 #: Small but not degenerate: 64² grid, 256² maps (texel footprints of ~3 cm).

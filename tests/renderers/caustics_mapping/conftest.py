@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from harness.scene import load_scene, with_settings
+from scenes import load_scene, with_settings
 
 ROOT = Path(__file__).resolve().parents[3]
 SCENES = sorted((ROOT / "scenes").glob("*.toml")) + sorted(

@@ -7,8 +7,8 @@ import dataclasses
 
 import numpy as np
 
-from harness.scene import load_scene, with_settings
 from renderers.caustics_mapping import create_context, render
+from scenes import load_scene, with_settings
 from tests.conftest import SCENES
 
 

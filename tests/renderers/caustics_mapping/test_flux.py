@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.scene import parse_scene
 from renderers.caustics_mapping import render_frame
+from scenes import parse_scene
 
 from .conftest import ROOT
 

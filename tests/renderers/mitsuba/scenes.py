@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from harness.scene import parse_scene
+from scenes import parse_scene
 
 CAMERA = """
 [camera]

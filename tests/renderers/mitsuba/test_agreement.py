@@ -20,11 +20,11 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from harness.scene import load_scene
 from renderers.mitsuba import _mi
 from renderers.mitsuba.camera import render_camera
 from renderers.mitsuba.noise import seed_statistics
 from renderers.mitsuba.reference import estimate_receivers
+from scenes import load_scene
 
 K = 8            # seeds per side: Welch dof ~ 2(K - 1) keeps the t tails moderate
 WIDTH = 16       # pixels = texels per side

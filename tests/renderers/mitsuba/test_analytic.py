@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.geometry import build_geometry
-from harness.results import texel_centers
 from renderers.mitsuba.reference import estimate_receivers
+from renderers.results import texel_centers
+from scenes.geometry import build_geometry
 from tests.renderers.mitsuba.scenes import FAR_SPHERE, glass_sphere, make_scene
 
 K = 4

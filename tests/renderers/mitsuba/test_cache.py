@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.scene import load_scene
 from renderers.mitsuba import _mi
 from renderers.mitsuba.cache import cache_key, load_entry
 from renderers.mitsuba.reference import render_reference
+from scenes import load_scene
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -113,7 +113,7 @@ def test_writer_killed_mid_write_leaves_a_miss_not_a_corrupt_hit(tiny, tmp_path)
     root = tmp_path / "c"
     script = textwrap.dedent(f"""
         import sys, time
-        from harness.scene import load_scene
+        from scenes import load_scene
         import renderers.mitsuba.cache as cache
         from renderers.mitsuba.reference import render_reference
         real = cache.write_exr
@@ -147,7 +147,7 @@ def test_two_processes_rendering_the_same_key(tiny, tmp_path):
     finished entry (hit); the entry is valid afterwards."""
     root = tmp_path / "c"
     script = textwrap.dedent(f"""
-        from harness.scene import load_scene
+        from scenes import load_scene
         from renderers.mitsuba.reference import render_reference
         r = render_reference(load_scene({str(tmp_path / "tiny.toml")!r}), cache={str(root)!r},
                              progress=False)

@@ -6,12 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.geometry import build_geometry
-from harness.scene import load_scene
 from renderers.mitsuba import _mi
 from renderers.mitsuba.camera import camera_max_depth
 from renderers.mitsuba.exporter import export_scene
 from renderers.mitsuba.photons import event_chains_counted
+from scenes import load_scene
+from scenes.geometry import build_geometry
 
 
 @pytest.mark.parametrize("name", ["glass_sphere", "water_pool", "metal_ring"])

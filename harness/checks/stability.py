@@ -1,0 +1,81 @@
+"""Numerical stability of a render: finite outputs, counted losses, energy bounds.
+
+The energy bound: caustic flux on the receivers can never exceed the flux the light
+sends through the caustic objects. We bound that from above with each object's
+bounding sphere (centre c, radius R):
+
+* point/spot/area light of intensity I at distance D: I Ω with the sphere's solid
+  angle Ω = 2π (1 − √(1 − (R/D)²)) (the light inside the sphere: no bound, inf);
+* directional light of irradiance E0: E0 π R²;
+* an open water surface: E0 times its area projected on the light's direction
+  (its bounding sphere would be loose but still a bound; this one is tight).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from renderers.results import RenderResult
+from scenes.geometry import SceneGeometry
+from scenes.model import DirectionalLight, Scene, WaterSurface
+
+__all__ = ["incident_flux_bound", "stability_summary"]
+
+
+def incident_flux_bound(scene: Scene, geometry: SceneGeometry) -> np.ndarray:
+    """Upper bound (W, RGB) of the flux the light sends through the caustic objects."""
+    light = scene.light
+    total = np.zeros(3)
+    for obj, geo in zip(scene.objects, geometry.objects, strict=True):
+        points = geo.mesh.positions.astype(np.float64)
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        centre = (lo + hi) / 2
+        radius = float(np.linalg.norm(points - centre, axis=1).max())
+        if isinstance(light, DirectionalLight):
+            power = np.asarray(light.irradiance, float)
+            if isinstance(obj, WaterSurface):
+                d = np.asarray(light.direction, float)
+                cos = abs(d[2]) / np.linalg.norm(d)
+                total += power * obj.size[0] * obj.size[1] * cos
+            else:
+                total += power * np.pi * radius**2
+            continue
+        position = np.asarray(getattr(light, "position", getattr(light, "center", centre)), float)
+        distance = float(np.linalg.norm(centre - position))
+        if distance <= radius:
+            return np.full(3, np.inf)
+        solid_angle = 2 * np.pi * (1 - np.sqrt(1 - (radius / distance) ** 2))
+        total += np.asarray(light.intensity, float) * solid_angle
+    return total
+
+
+def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResult,
+                      convergence=None) -> dict:
+    """What the report shows under "Numerical stability" for one render.
+
+    Keys: ``finite`` (every output finite), ``lost_splats`` and ``lost_fraction``,
+    ``flux_over_bound`` (receiver caustic flux / incident bound, must be <= 1),
+    and, when a convergence table is given, the safeguarded estimators' outcomes at
+    the most iterations measured (``diverged`` and ``oscillating`` must be 0).
+    """
+    arrays = [result.camera] + [m.irradiance for m in result.receivers]
+    finite = bool(all(np.isfinite(a).all() for a in arrays))
+    counts = result.metadata.get("status_counts") or {}
+    traced = sum(v for k, v in counts.items() if k != "empty") or 1
+    lost = int(result.metadata.get("lost_splats", 0))
+    bound = incident_flux_bound(scene, geometry)
+    flux = sum(m.total_flux() for m in result.receivers)
+    ratio = float(np.max(np.where(bound > 0, flux / np.maximum(bound, 1e-300), 0.0)))
+    summary = {"finite": finite, "lost_splats": lost, "lost_fraction": lost / traced,
+               "flux_over_bound": ratio, "energy_ok": ratio <= 1.0 + 1e-3}
+    if convergence is not None:
+        rows = [dict(zip(convergence.columns, r, strict=True)) for r in convergence.rows]
+        last = max(r["iteration"] for r in rows)
+        for r in rows:
+            if r["safeguarded"] and r["iteration"] == last:
+                summary[f"{r['estimator']} (safeguarded), {last} iterations"] = {
+                    k: round(float(r[k]), 4) for k in ("converged", "stalled", "lost",
+                                                       "diverged", "oscillating")}
+            if r["estimator"] == "newton" and not r["safeguarded"] and r["iteration"] == last:
+                summary["plain newton oscillating"] = round(float(r["oscillating"]), 4)
+    return summary

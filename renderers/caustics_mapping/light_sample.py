@@ -1,0 +1,282 @@
+"""One light sample of a caustics-mapping frame: the passes in order, summed.
+
+For each point sample of the light: receiver positions from the light, object
+surfaces (front; back for double refraction), one caustic trace per channel, the
+caustic map (optionally low-passed) and the receivers' (u, v) maps, the shadow map,
+and the camera pass. Each pass is a module of its own with its GLSL beside it;
+this module only orders them and keeps the sums (:class:`Accumulator`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import moderngl
+import numpy as np
+
+from renderers.caustics_mapping.camera import CameraInputs, render_camera
+from renderers.caustics_mapping.caustic_splat import splat_caustic_map
+from renderers.caustics_mapping.caustic_trace import Trace, material_table, run_caustic_trace
+from renderers.caustics_mapping.context import PassTimer, pool
+from renderers.caustics_mapping.estimators import MapLookup
+from renderers.caustics_mapping.lights import LightSetup
+from renderers.caustics_mapping.lowpass import lowpass_filter
+from renderers.caustics_mapping.meshes import upload_mesh
+from renderers.caustics_mapping.object_positions import render_object_surfaces
+from renderers.caustics_mapping.receiver_positions import render_receiver_positions
+from renderers.caustics_mapping.receiver_splat import splat_receiver_map, uv_mapping
+from renderers.caustics_mapping.shadow_map import render_shadow_map
+from scenes import Scene
+from scenes.geometry import SceneGeometry
+
+__all__ = ["CHANNELS", "Accumulator", "FrameState", "SceneSetup", "newton_eps",
+           "render_light_sample", "scene_setup"]
+
+#: Channel names of a dispersive trace (index 0, 1, 2; -1 traces all three at once).
+CHANNELS = "rgb"
+
+
+@dataclass(frozen=True, eq=False)
+class SceneSetup:
+    """What every light sample of one render shares: uploaded meshes, materials,
+    the channels traced, and the receivers' (u, v) mappings."""
+
+    receivers: list
+    objects: list
+    materials: object
+    caustic_objects: list[int]
+    closed: list[int]
+    channels: tuple[int, ...]
+    paper: bool
+    eps: float
+    mappings: list
+    points: np.ndarray
+    paths: str
+
+
+@dataclass(eq=False)
+class Accumulator:
+    """Sums over light samples: camera image (H, W, 3) W m^-2 sr^-1, receiver maps
+    (H, W, 3) W/m^2, caustic-map atlas, per-vertex records, passes run."""
+
+    camera: np.ndarray
+    maps: list[np.ndarray]
+    passes: list[str] = field(default_factory=list)
+    caustic_total: np.ndarray | None = None
+    hits: list[dict[str, np.ndarray]] = field(default_factory=list)
+    lookups: list[MapLookup] = field(default_factory=list)
+    covered_total: int = 0
+    map_faces: set[int] = field(default_factory=set)
+
+    def ran(self, name: str) -> None:
+        if name not in self.passes:
+            self.passes.append(name)
+
+
+@dataclass(eq=False)
+class FrameState:
+    """One render in progress: its inputs, shared set-up, timer and sums."""
+
+    scene: Scene
+    ctx: moderngl.Context
+    geometry: SceneGeometry
+    effects: tuple[str, ...]
+    timer: PassTimer
+    setup: SceneSetup
+    acc: Accumulator
+
+
+def newton_eps(scene: Scene, geometry: SceneGeometry) -> float:
+    """``settings.newton_eps``, or 1e-3 of the light-to-receiver distance (for a
+    directional light, of the caustic-object-to-receiver distance)."""
+    if scene.settings.newton_eps is not None:
+        return float(scene.settings.newton_eps)
+    rec = np.concatenate([g.mesh.positions for g in geometry.receivers]).astype(float)
+    target = (rec.min(axis=0) + rec.max(axis=0)) / 2
+    if hasattr(scene.light, "position"):
+        source = np.asarray(scene.light.position, float)
+    elif hasattr(scene.light, "center"):
+        source = np.asarray(scene.light.center, float)
+    else:
+        obj = np.concatenate([g.mesh.positions for g in geometry.objects]).astype(float)
+        source = (obj.min(axis=0) + obj.max(axis=0)) / 2
+    return max(1e-3 * float(np.linalg.norm(target - source)), 1e-12)
+
+
+def scene_setup(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry, *,
+                effects: tuple[str, ...]) -> SceneSetup:
+    """Upload the meshes and build what every light sample shares."""
+    materials = material_table([g.material for g in geometry.objects],
+                               [g.mesh.closed for g in geometry.objects], effects)
+    return SceneSetup(
+        receivers=[upload_mesh(ctx, g.mesh) for g in geometry.receivers],
+        objects=[upload_mesh(ctx, g.mesh) for g in geometry.objects],
+        materials=materials,
+        caustic_objects=[i for i, code in enumerate(materials.code) if code != 0],
+        closed=[i for i, code in enumerate(materials.code) if code == 1],
+        channels=(0, 1, 2) if "dispersion" in effects else (-1,),
+        paper=scene.settings.normalization == "paper",
+        eps=newton_eps(scene, geometry),
+        mappings=[uv_mapping(g) for g in geometry.receivers],
+        points=_sample_points(geometry),
+        paths=_paths(scene, effects),
+    )
+
+
+def _sample_points(geometry: SceneGeometry) -> np.ndarray:
+    """Receiver vertices plus a barycentric lattice on coarse meshes (face culling)."""
+    parts = []
+    lattice = np.array([(a, b) for a in np.linspace(0, 1, 9) for b in np.linspace(0, 1, 9)
+                        if a + b <= 1])
+    for rec in geometry.receivers:
+        p = rec.mesh.positions.astype(float)
+        parts.append(p)
+        if len(rec.mesh.faces) < 5000:
+            tri = p[rec.mesh.faces]
+            parts.append((tri[:, None, 0] * (1 - lattice.sum(1))[None, :, None]
+                          + tri[:, None, 1] * lattice[None, :, :1]
+                          + tri[:, None, 2] * lattice[None, :, 1:]).reshape(-1, 3))
+    return np.concatenate(parts)
+
+
+def _faces(light: LightSetup, points: np.ndarray) -> tuple[int, ...]:
+    """Map views that see any of ``points``: all of a single view, the cube faces hit."""
+    if not light.cube:
+        return (0,)
+    d = points - light.position
+    a = np.abs(d)
+    face = np.where((a[:, 0] >= a[:, 1]) & (a[:, 0] >= a[:, 2]), np.where(d[:, 0] >= 0, 0, 1),
+                    np.where(a[:, 1] >= a[:, 2], np.where(d[:, 1] >= 0, 2, 3),
+                             np.where(d[:, 2] >= 0, 4, 5)))
+    return tuple(int(f) for f in np.unique(face))
+
+
+def _paths(scene: Scene, effects: tuple[str, ...]) -> str:
+    return "+".join(e for e in ("reflection", "refraction.single", "refraction.double")
+                    if e in effects)
+
+
+def _read_rgba(texture: moderngl.Texture) -> np.ndarray:
+    w, h = texture.size
+    return np.frombuffer(texture.read(), np.float32).reshape(h, w, 4)
+
+
+def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: int,
+                        want_lookups: bool, want_atlas: bool) -> None:
+    """Every pass for one light sample, summed into ``state.acc``; resources go back
+    to the pool before returning."""
+    scene, ctx, geometry, setup, acc, timer = (state.scene, state.ctx, state.geometry,
+                                               state.setup, state.acc, state.timer)
+    s = scene.settings
+    resources = pool(ctx)
+    faces = _faces(sample, setup.points)
+    light = dataclasses.replace(sample, map_faces=faces)
+    acc.map_faces.update(faces)
+    with timer.measure("receiver_positions"):
+        positions = render_receiver_positions(
+            ctx, light, setup.receivers, size=s.positions_map, faces=faces)
+    acc.ran("receiver_positions")
+    if want_lookups:
+        acc.lookups.append(MapLookup(
+            positions.read_positions().copy(),
+            np.stack([v.view_proj for v in light.map_views]), s.positions_map,
+            light.cube, light.position.copy(), np.array(light.slots)))
+    front, back, traces = _trace_objects(state, light, positions=positions)
+    caustic = _splat_maps(state, light, faces=faces, traces=traces, positions=positions)
+    shadow = None
+    if "shadows" in state.effects:
+        with timer.measure("shadow_map"):
+            shadow = render_shadow_map(ctx, light, setup.objects, size=s.shadow_map,
+                                       faces=faces)
+        acc.ran("shadow_map")
+    diag = float(np.linalg.norm(np.ptp(setup.points, axis=0)))
+    inputs = CameraInputs(shadow, s.shadow_map, caustic, s.caustic_map, positions.positions,
+                          s.positions_map, scene.info.direct_lighting, 1e-3 * diag)
+    with timer.measure("camera"):
+        acc.camera += render_camera(ctx, light, camera=scene.camera, geometry=geometry,
+                                    receivers=setup.receivers, objects=setup.objects,
+                                    inputs=inputs)
+    acc.ran("camera")
+    if want_atlas:
+        atlas = _read_rgba(caustic)[:, :, :3]
+        acc.caustic_total = atlas.copy() if acc.caustic_total is None \
+            else acc.caustic_total + atlas
+    for channel, trace in zip(setup.channels, traces, strict=False):
+        data = trace.read()
+        data["channel"] = np.full(trace.count, channel, np.int32)
+        data["light"] = np.full(trace.count, light_index, np.int32)
+        acc.hits.append(data)
+        trace.give_back(resources)
+    for resource in (front, back, positions):
+        if resource is not None:
+            resource.give_back(resources)
+    for texture in (caustic, shadow):
+        if texture is not None:
+            resources.give_back(texture)
+
+
+def _trace_objects(state: FrameState, light: LightSetup, *, positions):
+    """Object surfaces from the light (front; back for double refraction), then one
+    caustic trace per channel. Returns (front, back, traces)."""
+    ctx, setup, acc, timer = state.ctx, state.setup, state.acc, state.timer
+    s = state.scene.settings
+    traces: list[Trace] = []
+    if not setup.caustic_objects:
+        return None, None, traces
+    with timer.measure("object_positions.front"):
+        front = render_object_surfaces(ctx, light, setup.objects, grid=s.grid,
+                                       which=setup.caustic_objects, count=setup.paper)
+    acc.ran("object_positions.front")
+    acc.covered_total += front.covered
+    back = None
+    if "refraction.double" in state.effects:
+        with timer.measure("object_positions.back"):
+            back = render_object_surfaces(ctx, light, setup.objects, grid=s.grid, back=True,
+                                          which=setup.closed)
+        acc.ran("object_positions.back")
+    for channel in setup.channels:
+        name = f"caustic_trace.{setup.paths}" + (
+            f".{CHANNELS[channel]}" if channel >= 0 else "")
+        with timer.measure(name):
+            trace = run_caustic_trace(
+                ctx, light, positions=positions, front=front, back=back,
+                materials=setup.materials, grid=s.grid,
+                estimator=s.estimator, iterations=s.iterations,
+                safeguarded=s.safeguarded, eps=setup.eps, channel=channel,
+                paper=setup.paper, covered=front.covered)
+        acc.ran(name)
+        traces.append(trace)
+    return front, back, traces
+
+
+def _splat_maps(state: FrameState, light: LightSetup, *, faces: tuple[int, ...],
+                traces: list[Trace], positions) -> moderngl.Texture:
+    """Splat the traces into the caustic map (optionally low-passed) and into each
+    receiver's (u, v) map; returns the caustic-map texture (the camera reads it)."""
+    ctx, setup, acc, timer = state.ctx, state.setup, state.acc, state.timer
+    s = state.scene.settings
+    resources = pool(ctx)
+    csize = s.caustic_map
+    caustic = resources.texture((len(faces) * csize, csize))
+    with timer.measure("caustic_map"):
+        splat_caustic_map(ctx, light, traces, caustic, size=csize, faces=faces,
+                          sigma=s.splat_sigma_texels, cut=s.splat_radius)
+    acc.ran("caustic_map")
+    if s.lowpass:
+        with timer.measure("lowpass"):
+            filtered = lowpass_filter(ctx, caustic, size=csize)
+        resources.give_back(caustic)
+        caustic = filtered
+        acc.ran("lowpass")
+    with timer.measure("receiver_map"):
+        for index, rec in enumerate(state.geometry.receivers):
+            target = resources.texture(s.receiver_map)
+            splat_receiver_map(ctx, light, traces, target, index=index, receiver=rec,
+                               mapping=setup.mappings[index], positions=positions,
+                               caustic_size=csize, sigma=s.splat_sigma_texels,
+                               cut=s.splat_radius)
+            acc.maps[index] += _read_rgba(target)[:, :, :3]
+            resources.give_back(target)
+    acc.ran("receiver_map")
+    return caustic

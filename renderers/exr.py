@@ -1,0 +1,71 @@
+"""EXR files through the OpenEXR package: atomic writes, checked reads.
+
+Images are float32 arrays of shape (H, W, 3) (an ``RGB`` layer) or (H, W) (one
+channel). Writes go to a temporary file in the same directory and are renamed into
+place, so a reader never sees a half-written file.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import OpenEXR
+
+from scenes.errors import HarnessError
+
+__all__ = ["ExrError", "read_exr", "write_exr"]
+
+
+class ExrError(HarnessError, ValueError):
+    """An EXR file is missing, truncated, corrupt, or lacks a channel."""
+
+
+def write_exr(path: str | Path, layers: dict[str, np.ndarray]) -> None:
+    """Write float32 layers to ``path`` atomically (ZIP compression).
+
+    Parameters
+    ----------
+    layers
+        Name to array: (H, W, 3) arrays become ``NAME.R/G/B`` (``RGB`` becomes
+        ``R, G, B``), (H, W) arrays one channel. All must share H and W.
+    """
+    path = Path(path)
+    shapes = {a.shape[:2] for a in layers.values()}
+    if len(shapes) != 1:
+        raise ValueError(f"layers differ in size: {sorted(shapes)}")
+    channels = {name: np.ascontiguousarray(a, dtype=np.float32) for name, a in layers.items()}
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".exr")
+    os.close(fd)
+    try:
+        OpenEXR.File(header, channels).write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def read_exr(path: str | Path) -> dict[str, np.ndarray]:
+    """Read every layer of an EXR as float32 arrays (RGB layers as (H, W, 3)).
+
+    Raises
+    ------
+    ExrError
+        The file is missing, truncated or corrupt, or holds non-finite values.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ExrError(f"{path}: no such file")
+    try:
+        channels = OpenEXR.File(str(path)).channels()
+        layers = {name: np.asarray(c.pixels, dtype=np.float32) for name, c in channels.items()}
+    except Exception as error:  # OpenEXR raises RuntimeError and others on bad files
+        raise ExrError(f"{path}: unreadable EXR ({error})") from None
+    for name, arr in layers.items():
+        if not np.all(np.isfinite(arr)):
+            raise ExrError(f"{path}: layer {name} holds NaN or Inf")
+    return layers

@@ -1,0 +1,86 @@
+"""Result types both renderers produce (the radiometric contract of DESIGN.md).
+
+Map layout: a receiver irradiance map is a float32 array of shape (H, W, 3) over the
+receiver's (u, v) domain ``extent = (umin, umax, vmin, vmax)``; column i covers
+u in [umin + i Δu, umin + (i+1) Δu) with Δu = (umax - umin) / W, row j covers
+v likewise, **row 0 at vmin**. Values are caustic irradiance E in W/m² (RGB). Camera
+images are radiance in W m⁻² sr⁻¹, shape (H, W, 3), row 0 at the top of the image.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["ReceiverMap", "RenderResult", "texel_centers"]
+
+
+@dataclass(frozen=True, eq=False)
+class ReceiverMap:
+    """Caustic irradiance over one receiver's (u, v) domain.
+
+    Attributes
+    ----------
+    irradiance : ndarray, (H, W, 3), float32
+        E in W/m², row 0 at vmin.
+    extent : tuple of float
+        (umin, umax, vmin, vmax) in the receiver's (u, v) units.
+    variance : ndarray, (H, W, 3), float32, or None
+        Per-texel variance of the mean (references rendered with K seeds).
+    """
+
+    irradiance: np.ndarray
+    extent: tuple[float, float, float, float]
+    variance: np.ndarray | None = None
+
+    def texel_area(self) -> float:
+        """Area of one texel in (u, v) units squared (m² for planes and heightfields)."""
+        umin, umax, vmin, vmax = self.extent
+        h, w = self.irradiance.shape[:2]
+        return (umax - umin) * (vmax - vmin) / (w * h)
+
+    def total_flux(self) -> np.ndarray:
+        """Σ E · texel area, per channel: watts for planar receivers."""
+        return self.irradiance.reshape(-1, 3).sum(axis=0) * self.texel_area()
+
+
+@dataclass(frozen=True, eq=False)
+class RenderResult:
+    """One render of a scene by either renderer.
+
+    Attributes
+    ----------
+    renderer : str
+        ``"caustics_mapping"`` or ``"mitsuba"``.
+    camera : ndarray, (H, W, 3), float32
+        Linear radiance from the scene camera.
+    receivers : tuple of ReceiverMap
+        One per ``scene.receivers`` entry, in order.
+    effects : tuple of str
+        The effects simulated (``scenes.effects_of``).
+    timings : dict
+        Seconds per stage, e.g. ``{"caustic_map": 0.004}``.
+    timer : str
+        Which clock produced ``timings`` (e.g. ``"ctx.finish + perf_counter"``).
+    metadata : dict
+        JSON-serialisable extras: passes run, event chains, photons, seeds, versions.
+    """
+
+    renderer: str
+    camera: np.ndarray
+    receivers: tuple[ReceiverMap, ...]
+    effects: tuple[str, ...]
+    timings: dict[str, float] = field(default_factory=dict)
+    timer: str = ""
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+
+def texel_centers(extent, shape) -> tuple[np.ndarray, np.ndarray]:
+    """(u, v) of texel centres for a map of ``shape`` = (H, W): arrays of W and H."""
+    umin, umax, vmin, vmax = extent
+    h, w = shape[:2]
+    u = umin + (np.arange(w) + 0.5) * (umax - umin) / w
+    v = vmin + (np.arange(h) + 0.5) * (vmax - vmin) / h
+    return u, v

@@ -1,0 +1,200 @@
+"""What one scene's comparison produced: the in-memory contract between the
+comparison (``harness.compare``) and the HTML report (``reports``).
+
+The comparison fills a :class:`SceneComparison`; the report turns it into
+``DIR/<scene>/index.html`` and the summary ``DIR/index.html``. Nothing in here
+renders or computes; these are plain frozen records.
+
+Image naming: ``images`` keys are ``"<view>/<kind>"`` where view is ``camera`` or
+``receiver0``, ``receiver1``, ... and kind is one of
+
+* ``method``       caustics-mapping image, linear float32 (H, W, 3)
+* ``reference``  Mitsuba mean, linear float32 (H, W, 3)
+* ``signed``     method − reference, float (H, W, 3)
+* ``ssim``       SSIM map of the tone-mapped images, float (H, W) in [-1, 1]
+* ``flip``       HDR-FLIP map, float (H, W) in [0, 1]
+* ``mask_caustic``  bool (H, W): the caustic region (reference above its threshold)
+* ``mask_object``   bool (H, W), camera only: pixels of the caustic object (excluded)
+
+Receiver maps are stored with row 0 at vmin (``renderers.results``); flip them
+vertically for display so +v points up.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+__all__ = [
+    "METRIC_FORMULAS",
+    "EqualErrorSpeedup",
+    "MetricValue",
+    "SceneComparison",
+    "Table",
+    "ThresholdCheck",
+]
+
+#: Human-readable formula of each metric, shown beside its value in every output.
+METRIC_FORMULAS: dict[str, str] = {
+    "relmse": "mean of (method − ref)² / (ref² + 0.01) over pixels and channels",
+    "relmse_trimmed": "relMSE after dropping the largest 0.1 % of the terms",
+    "psnr": "10 log10(peak² / MSE) dB, peak = max of ref in the region",
+    "ssim": "mean SSIM (Wang et al. 2004: Gaussian σ = 1.5, population covariance, "
+            "K1 = 0.01, K2 = 0.03) of Reinhard + sRGB tone-mapped images, data_range 1",
+    "flip": "mean HDR-FLIP (Andersson et al. 2021) with the scene's fixed exposure range",
+    "flux_ratio": "Σ luminance(method) / Σ luminance(ref) over the region (1 = energy kept)",
+}
+
+
+@dataclass(frozen=True)
+class EqualErrorSpeedup:
+    """Equal-error speedup of a real-time point over the reference's curve.
+
+    Attributes
+    ----------
+    speedup : float
+        t_ref(e_method) / t_method (an upper bound when ``kind == "bound"``).
+    reference_time : float
+        t_ref(e_method) in seconds.
+    kind : {"interpolated", "extrapolated", "bound"}
+        How t_ref(e_method) was obtained (see the module docstring).
+    """
+
+    speedup: float
+    reference_time: float
+    kind: Literal["interpolated", "extrapolated", "bound"]
+
+
+@dataclass(frozen=True)
+class MetricValue:
+    """One metric of the real-time render, beside the reference's noise floor.
+
+    Attributes
+    ----------
+    view : str
+        ``camera`` or ``receiver<i>``.
+    region : str
+        ``full`` (the whole receiver map or image), ``caustic`` (reference above
+        the caustic threshold) or ``object_masked`` (camera without the object).
+    metric : str
+        A key of :data:`METRIC_FORMULAS`.
+    value : float
+        Caustics mapping vs the reference.
+    noise_floor : float or None
+        The same metric of an independent reference seed vs the reference: the
+        error the reference's own noise alone produces.
+    """
+
+    view: str
+    region: str
+    metric: str
+    value: float
+    noise_floor: float | None = None
+
+
+@dataclass(frozen=True)
+class Table:
+    """A small column table (CSV-shaped): ``rows`` are tuples in ``columns`` order."""
+
+    columns: tuple[str, ...]
+    rows: tuple[tuple[Any, ...], ...]
+
+    def column(self, name: str) -> list[Any]:
+        """All values of one column."""
+        i = self.columns.index(name)
+        return [row[i] for row in self.rows]
+
+    def records(self) -> list[dict[str, Any]]:
+        """The rows as dicts keyed by column name."""
+        return [dict(zip(self.columns, row, strict=True)) for row in self.rows]
+
+    @classmethod
+    def from_records(cls, columns: tuple[str, ...], records) -> Table:
+        """A table from dicts keyed by column name; every column must be present."""
+        return cls(tuple(columns), tuple(tuple(r[c] for c in columns) for r in records))
+
+
+@dataclass(frozen=True)
+class ThresholdCheck:
+    """One accuracy bound (``harness/checks/data/thresholds.toml``) and whether it held."""
+
+    metric: str
+    region: str
+    view: str
+    bound: float
+    kind: str  # "max" (value must be <= bound) or "min" (value must be >= bound)
+    value: float
+    passed: bool
+    provenance: str = ""
+
+
+@dataclass(frozen=True, eq=False)
+class SceneComparison:
+    """Everything the report shows for one scene.
+
+    Attributes
+    ----------
+    name, description, source : str
+        From the scene file (untrusted text: the report must escape it).
+    effects : tuple of str
+        Effects the scene calls for.
+    settings : dict
+        Renderer settings used (JSON-serialisable).
+    metrics : tuple of MetricValue
+    images : dict of str to ndarray
+        See the module docstring for keys and layouts.
+    exposure : dict
+        ``white`` (tone-curve white point per view), ``flip_start``, ``flip_stop``
+        (exposure stops), ``diff_range`` (symmetric colour-bar limit per view).
+    convergence : Table or None
+        Columns: estimator, safeguarded, iteration, mean_error_m, p95_error_m,
+        max_error_m, mean_error_texels, p95_error_texels, max_error_texels,
+        converged, diverged, oscillating, stalled, lost, lookups_per_vertex, relmse,
+        time_ms.
+    cost : Table or None
+        Columns: series (``caustics_mapping`` or ``reference``), label, estimator,
+        iterations, grid, caustic_map, splat_sigma, time_s, relmse, pareto.
+    speedup : EqualErrorSpeedup or None
+    claims : dict of str to str
+        The paper's claims checked against the convergence numbers, and the outcome.
+    provenance : dict
+        Passes run, event chains counted, photons/spp, seeds, versions, timings,
+        timer, machine, reference cache hit.
+    files : dict of str to str
+        Paths of written originals relative to the scene's output folder
+        (``{"camera/method": "camera_method.exr", ...}``).
+    thresholds : tuple of ThresholdCheck
+    stability : dict or None
+        Outcome of the numerical-stability checks for this scene, if run.
+    speedup_point : (float, float) or None
+        The caustics-mapping (time s, relMSE) that ``speedup`` was computed for;
+        the report marks it on the cost plot (when None it takes the Pareto point
+        nearest to ``speedup.reference_time / speedup.speedup``).
+    """
+
+    name: str
+    description: str
+    source: str
+    effects: tuple[str, ...]
+    settings: dict[str, Any]
+    metrics: tuple[MetricValue, ...]
+    images: dict[str, np.ndarray]
+    exposure: dict[str, Any]
+    convergence: Table | None = None
+    cost: Table | None = None
+    speedup: EqualErrorSpeedup | None = None
+    claims: dict[str, str] = field(default_factory=dict)
+    provenance: dict[str, Any] = field(default_factory=dict)
+    files: dict[str, str] = field(default_factory=dict)
+    thresholds: tuple[ThresholdCheck, ...] = ()
+    stability: dict[str, Any] | None = None
+    speedup_point: tuple[float, float] | None = None
+
+    def metric(self, view: str, region: str, metric: str) -> MetricValue:
+        """Look one metric up; KeyError if it was not computed."""
+        for m in self.metrics:
+            if (m.view, m.region, m.metric) == (view, region, metric):
+                return m
+        raise KeyError((view, region, metric))

@@ -1,0 +1,139 @@
+"""Triangle meshes as both renderers receive them, and the transforms that place them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from scenes.model import Transform
+
+__all__ = ["TriangleMesh", "builtin_mesh_path", "load_mesh_file", "transform_matrix"]
+
+
+@dataclass(frozen=True, eq=False)
+class TriangleMesh:
+    """An indexed triangle mesh in world space.
+
+    Attributes
+    ----------
+    positions : ndarray, shape (N, 3), float32
+        Vertex positions in metres.
+    normals : ndarray, shape (N, 3), float32
+        Unit smooth vertex normals (area-weighted for loaded meshes, analytic for
+        primitives). They point outward for closed meshes.
+    faces : ndarray, shape (M, 3), uint32
+        Counter-clockwise vertex indices seen from the normal side.
+    uvs : ndarray, shape (N, 2), float32, or None
+        Receiver parameter coordinates (metres for planes and heightfields).
+    closed : bool
+        The mesh bounds a volume (double refraction applies).
+    """
+
+    positions: np.ndarray
+    normals: np.ndarray
+    faces: np.ndarray
+    uvs: np.ndarray | None = None
+    closed: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ("positions", "normals"):
+            arr = getattr(self, name)
+            if arr.ndim != 2 or arr.shape[1] != 3:
+                raise ValueError(f"{name} must have shape (N, 3), got {arr.shape}")
+        if self.normals.shape != self.positions.shape:
+            raise ValueError("normals and positions differ in shape")
+        if self.faces.ndim != 2 or self.faces.shape[1] != 3:
+            raise ValueError(f"faces must have shape (M, 3), got {self.faces.shape}")
+        for arr in (self.positions, self.normals, self.faces, self.uvs):
+            if arr is not None:
+                arr.setflags(write=False)
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """Axis-aligned bounds, shape (2, 3): min row, max row, metres."""
+        return np.stack([self.positions.min(axis=0), self.positions.max(axis=0)])
+
+    def area(self) -> float:
+        """Total surface area in m²."""
+        p = self.positions.astype(np.float64)
+        a, b, c = p[self.faces[:, 0]], p[self.faces[:, 1]], p[self.faces[:, 2]]
+        return float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
+
+
+def make_mesh(positions, normals, faces, uvs=None, *, closed: bool = False) -> TriangleMesh:
+    """Build a :class:`TriangleMesh` with the canonical dtypes and unit normals."""
+    normals = np.asarray(normals, np.float64)
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.where(length > 0, normals / np.maximum(length, 1e-30), [0.0, 0.0, 1.0])
+    return TriangleMesh(
+        positions=np.ascontiguousarray(positions, np.float32),
+        normals=np.ascontiguousarray(normals, np.float32),
+        faces=np.ascontiguousarray(faces, np.uint32),
+        uvs=None if uvs is None else np.ascontiguousarray(uvs, np.float32),
+        closed=closed,
+    )
+
+
+def transform_matrix(t: Transform) -> np.ndarray:
+    """4x4 matrix of scale, then rotation about x, y, z (degrees), then translation."""
+    rx, ry, rz = np.radians(t.rotate)
+    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
+    rot_x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    rot_y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rot_z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    m = np.eye(4)
+    m[:3, :3] = rot_z @ rot_y @ rot_x * t.scale
+    m[:3, 3] = t.translate
+    return m
+
+
+def apply_transform(mesh: TriangleMesh, m: np.ndarray) -> TriangleMesh:
+    """Transform positions by ``m`` and normals by its inverse transpose."""
+    p = mesh.positions.astype(np.float64) @ m[:3, :3].T + m[:3, 3]
+    n = mesh.normals.astype(np.float64) @ np.linalg.inv(m[:3, :3])
+    return make_mesh(p, n, mesh.faces, mesh.uvs, closed=mesh.closed)
+
+
+def builtin_mesh_path(name: str) -> Path:
+    """Path of a built-in mesh (``bunny``: the Stanford bunny inside pymeshlab's wheel).
+
+    Raises
+    ------
+    FileNotFoundError
+        With the install command, when the package that ships the mesh is missing.
+    """
+    if name != "bunny":
+        raise FileNotFoundError(f"unknown built-in mesh {name!r} (known: bunny)")
+    try:
+        import pymeshlab  # noqa: PLC0415 - optional extra `bunny`, only for the bunny
+    except ImportError:
+        raise FileNotFoundError(
+            "builtin:bunny needs the optional extra: pip install 'caustics-harness[bunny]'"
+        ) from None
+    path = Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "bunny.obj"
+    if not path.is_file():
+        raise FileNotFoundError(f"pymeshlab no longer ships {path}")
+    return path
+
+
+def load_mesh_file(path: str | Path, *, closed: bool) -> TriangleMesh:
+    """Load OBJ/PLY with trimesh, merge duplicate vertices, area-weighted smooth normals.
+
+    Raises
+    ------
+    ValueError
+        The file holds no triangles or is not a mesh.
+    """
+
+    loaded = trimesh.load(str(path), force="mesh", process=True)
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise ValueError("holds no triangles")
+    uvs = None
+    visual = getattr(loaded, "visual", None)
+    if visual is not None and getattr(visual, "uv", None) is not None:
+        if len(visual.uv) == len(loaded.vertices):
+            uvs = np.asarray(visual.uv)
+    return make_mesh(loaded.vertices, loaded.vertex_normals, loaded.faces, uvs, closed=closed)

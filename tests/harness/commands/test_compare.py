@@ -1,0 +1,121 @@
+"""`caustics compare` end to end on a small glass sphere: files, numbers, cache."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+from harness.cli import main
+from tests.conftest import REPO, SCENES
+
+SMALL = ["--set", "photons=100000", "--set", "seeds=2", "--set", "spp=2",
+         "--set", "grid=48", "--set", "caustic_map=128", "--set", "positions_map=128",
+         "--set", "shadow_map=128", "--set", "receiver_map=[48, 48]"]
+
+
+def _small_scene(tmp_path):
+    text = (SCENES / "glass_sphere.toml").read_text().replace("resolution = [512, 512]",
+                                                                "resolution = [48, 48]")
+    path = tmp_path / "glass_sphere.toml"
+    path.write_text(text)
+    return path
+
+
+def test_compare_writes_everything_and_reuses_the_cache(tmp_path, capsys):
+    """A quick compare writes the report, metrics.json (each metric beside its noise
+    floor), convergence.csv (every estimator, plain and safeguarded, iterations
+    0..4), cost_accuracy.csv (real-time and reference series, Pareto flags), records
+    the equal-error speedup and the paper's claims; a second run takes both
+    references from the cache."""
+    scene, out, cache = _small_scene(tmp_path), tmp_path / "out", tmp_path / "cache"
+    argv = ["compare", str(scene), "-o", str(out), "--quick", "--cache-dir", str(cache),
+            "-q", *SMALL]
+    assert main(argv) == 0
+    summary = capsys.readouterr().out
+    assert "glass_sphere" in summary and "equal-error speedup" in summary
+    folder = out / "glass_sphere"
+    assert (out / "index.html").is_file() and (folder / "index.html").is_file()
+    data = json.loads((folder / "metrics.json").read_text())
+    relmse = [m for m in data["metrics"] if (m["view"], m["region"], m["metric"])
+              == ("receiver0", "caustic", "relmse")]
+    assert len(relmse) == 1 and relmse[0]["value"] > 0 and relmse[0]["noise_floor"] > 0
+    assert {m["view"] for m in data["metrics"]} == {"camera", "receiver0"}
+    assert data["speedup"]["speedup"] > 0
+    assert data["speedup"]["kind"] in ("interpolated", "extrapolated", "bound")
+    assert len(data["claims"]) == 2
+    assert all(text.startswith(("holds", "does not hold", "not measured"))
+               for text in data["claims"].values())
+    assert "caustic_map" in data["provenance"]["caustics_mapping"]["passes"]
+    assert data["provenance"]["reference"]["event_chains"]
+    for name in data["files"].values():
+        assert (folder / name).is_file(), name
+    for name in ("convergence.pdf", "cost_accuracy.pdf"):
+        assert (folder / name).read_bytes().startswith(b"%PDF"), name
+    with (folder / "convergence.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    keys = {(r["estimator"], r["safeguarded"], int(r["iteration"])) for r in rows}
+    assert keys == {(e, s, k) for e in ("modified", "newton", "secant")
+                    for s in ("False", "True") for k in range(5)}
+    with (folder / "cost_accuracy.csv").open() as f:
+        cost = list(csv.DictReader(f))
+    assert {r["series"] for r in cost} == {"caustics_mapping", "reference"}
+    assert any(r["pareto"] == "True" for r in cost)
+    assert main(argv[:-len(SMALL)] + SMALL + ["--studies", "metrics"]) == 0
+    again = json.loads((folder / "metrics.json").read_text())
+    assert again["provenance"]["reference"]["cache"] == "hit"
+    assert again["provenance"]["independent_reference"]["cache"] == "hit"
+
+
+def test_compare_rejects_unknown_study(tmp_path, capsys):
+    assert main(["compare", str(_small_scene(tmp_path)), "-o", str(tmp_path / "o"),
+                 "--studies", "metrics,bogus", "-q"]) == 2
+    assert "unknown study bogus" in capsys.readouterr().err
+
+
+def test_compare_checks_bounds_like_the_test_suite(tmp_path, capsys, monkeypatch):
+    """On the committed glass_sphere, `compare` checks the calibrated bounds at the
+    golden settings: all four hold at the scene's own settings; with 0 iterations
+    some fail and --fail-on-thresholds exits 3. A modified copy of the scene is not
+    checked against bounds calibrated for the committed one."""
+    monkeypatch.chdir(REPO)
+    out, cache = tmp_path / "out", tmp_path / "cache"
+    fast = ["--studies", "metrics", "--cache-dir", str(cache), "-q", "--set",
+            "photons=50000", "--set", "seeds=2", "--set", "spp=1"]
+    scene = str(SCENES / "glass_sphere.toml")
+    assert main(["compare", scene, "-o", str(out), *fast]) == 0
+    data = json.loads((out / "glass_sphere" / "metrics.json").read_text())
+    assert len(data["thresholds"]) == 4 and all(t["passed"] for t in data["thresholds"])
+    assert main(["compare", scene, "-o", str(out), *fast, "--iterations", "0",
+                 "--fail-on-thresholds"]) == 3
+    data = json.loads((out / "glass_sphere" / "metrics.json").read_text())
+    assert not all(t["passed"] for t in data["thresholds"])
+    copy = _small_scene(tmp_path)
+    assert main(["compare", str(copy), "-o", str(tmp_path / "copy"), *fast]) == 0
+    data = json.loads((tmp_path / "copy" / "glass_sphere" / "metrics.json").read_text())
+    assert data["thresholds"] == []
+
+
+def test_compare_by_bundled_name_from_any_directory(tmp_path, monkeypatch, capsys):
+    """Run from an unrelated directory, `compare glass_sphere` finds the bundled scene,
+    the bundled golden references and bounds (each bound is checked and reported),
+    and names the method's images `<view>_method.exr`."""
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "out"
+    argv = ["compare", "glass_sphere", "-o", str(out), "--studies", "metrics",
+            "--cache-dir", str(tmp_path / "cache"), "-q", *SMALL]
+    assert main(argv) == 0
+    data = json.loads((out / "glass_sphere" / "metrics.json").read_text())
+    assert data["scene"]["source"].endswith("scenes/glass_sphere.toml")
+    assert data["thresholds"], "the bundled bounds were not checked"
+    assert {t["view"] for t in data["thresholds"]} == {"receiver0"}
+    assert data["files"]["receiver0/method"] == "receiver0_method.exr"
+    assert (out / "glass_sphere" / "receiver0_method.exr").is_file()
+
+
+def test_missing_thresholds_file_is_an_error(tmp_path, capsys):
+    """A named bounds file that does not exist stops the run; it never means "no bounds"."""
+    missing = tmp_path / "absent.toml"
+    argv = ["compare", "glass_sphere", "-o", str(tmp_path / "out"), "--thresholds",
+            str(missing), "-q"]
+    assert main(argv) == 1
+    assert f"error: {missing}: cannot read file" in capsys.readouterr().err

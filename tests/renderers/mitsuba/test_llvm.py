@@ -1,0 +1,54 @@
+"""Dr.Jit's libLLVM is found, or installed as root, or the error says how."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from renderers import system as apt
+from renderers.mitsuba import llvm
+
+
+def test_found_library_is_configured(monkeypatch):
+    """On this machine (tox installs libllvm19 first) the path is set explicitly."""
+    monkeypatch.delenv("DRJIT_LIBLLVM_PATH", raising=False)
+    path = llvm.configure_drjit(install=False)
+    assert os.path.isfile(path) and "19" in os.path.basename(path)
+    assert os.environ["DRJIT_LIBLLVM_PATH"] == path
+
+
+def test_preset_path_is_honoured(monkeypatch, tmp_path):
+    lib = tmp_path / "libLLVM.so.99"
+    lib.write_bytes(b"")
+    monkeypatch.setenv("DRJIT_LIBLLVM_PATH", str(lib))
+    assert llvm.find_libllvm() == str(lib)
+
+
+def test_missing_and_not_root_names_the_command(monkeypatch):
+    """Without the library and without root, the error gives the exact apt command."""
+    monkeypatch.delenv("DRJIT_LIBLLVM_PATH", raising=False)
+    monkeypatch.setattr(llvm, "LLVM_GLOBS", ("/nonexistent/libLLVM.so.19*",))
+    monkeypatch.setattr(apt.os, "geteuid", lambda: 1000)
+    with pytest.raises(apt.SystemSetupError) as info:
+        llvm.ensure_libllvm(install=True)
+    assert "apt-get update && apt-get install -y libllvm19" in str(info.value)
+
+
+def test_install_is_attempted_as_root(monkeypatch):
+    """As root, a missing library triggers the apt install, then is found."""
+    monkeypatch.delenv("DRJIT_LIBLLVM_PATH", raising=False)
+    calls = []
+    monkeypatch.setattr(apt.os, "geteuid", lambda: 0)
+    monkeypatch.setattr(apt.shutil, "which", lambda name: "/usr/bin/apt-get")
+
+    def fake_install(package):
+        calls.append(package)
+        monkeypatch.setattr(llvm, "LLVM_GLOBS", ("/usr/lib/x86_64-linux-gnu/libLLVM.so.19*",))
+
+    monkeypatch.setattr(llvm, "LLVM_GLOBS", ("/nonexistent/libLLVM.so.19*",))
+    monkeypatch.setattr(apt, "_apt_install", fake_install)
+    assert "19" in llvm.ensure_libllvm(install=True)
+    assert calls == ["libllvm19"]
+
+
