@@ -38,8 +38,9 @@ __all__ = ["FORMAT_VERSION", "cache_dir", "cache_key", "entry_lock", "load_entry
 #: Bump when the renderer's output or the directory format changes meaning.
 #: 2: receiver maps hold caustic irradiance only; 3: traced with caustic-only
 #: emission (every photon aimed at the caustic objects), stratified lanes and
-#: TEA-hashed PCG32 seeding (same expectation, new samples, less noise)
-FORMAT_VERSION = 3
+#: TEA-hashed PCG32 seeding (same expectation, new samples, less noise); 4: all-paths
+#: mode follows paths up to a 64-event safety cap (was 8) and records the cut flux
+FORMAT_VERSION = 4
 RESULT_JSON = "result.json"
 
 

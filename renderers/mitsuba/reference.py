@@ -11,6 +11,7 @@ pixel (ptracer), mean and variance of the mean.
 from __future__ import annotations
 
 import time
+import warnings
 from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,15 +23,25 @@ from renderers.mitsuba import _mi
 from renderers.mitsuba.cache import cache_dir, cache_key, entry_lock, load_entry, write_result_dir
 from renderers.mitsuba.camera import CAMERA_LIMITS, camera_max_depth, render_camera
 from renderers.mitsuba.noise import caustic_region, relative_noise, seed_statistics
-from renderers.mitsuba.photons import DEFAULT_BATCH, PhotonTracer, event_chains_counted
+from renderers.mitsuba.photons import (
+    DEFAULT_BATCH,
+    MAX_SPECULAR_EVENTS,
+    PhotonTracer,
+    event_chains_counted,
+)
 from renderers.results import ReceiverMap, RenderResult
 from scenes import effects_of
 from scenes.geometry import build_geometry
 from scenes.model import Scene
 
-__all__ = ["ReceiverEstimate", "estimate_receivers", "render_reference"]
+__all__ = ["CUT_WARNING", "CutFluxWarning", "ReceiverEstimate", "estimate_receivers",
+           "render_reference"]
 
 TIMER = "time.perf_counter (wall clock, includes JIT compilation)"
+
+
+class CutFluxWarning(UserWarning):
+    """The reference's path limit cut off more than :data:`CUT_WARNING` of the flux."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,6 +70,10 @@ class ReceiverEstimate:
         The first seed.
     channel_passes : int
         Photon-tracer passes per seed: 1, or 3 with dispersion (one per channel).
+    cut_fraction : float
+        Largest fraction, over RGB, of the emitted flux on paths that the safety cap
+        of :data:`.photons.MAX_SPECULAR_EVENTS` stopped (all-paths mode; 0 in chain
+        mode, whose chains end by definition).
     """
 
     maps: tuple[ReceiverMap, ...] | None
@@ -70,6 +85,17 @@ class ReceiverEstimate:
     seeds: int
     seed: int
     channel_passes: int
+    cut_fraction: float = 0.0
+
+
+#: Cut flux fraction above which the reference warns that its path limit loses light.
+CUT_WARNING = 1e-4
+
+
+def _cut_fraction(emitted: np.ndarray, cut: np.ndarray) -> float:
+    """max over RGB of cut / emitted flux (0 where nothing was emitted)."""
+    fractions = np.divide(cut, emitted, out=np.zeros(3), where=emitted > 0)
+    return float(fractions.max())
 
 
 def _progress(total: int, desc: str, enabled: bool):
@@ -104,6 +130,7 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
     sums_total = [[0.0] * n_rec for _ in range(k)]
     sums_caustic = [[0.0] * n_rec for _ in range(k)]
     traced, history, noise, stopped = 0, [], float("nan"), "budget"
+    emitted, cut = np.zeros(3), np.zeros(3)
     with _progress(budget, f"photons ({k} seeds)", progress) as bar:
         stream = 0
         while traced < budget:
@@ -115,6 +142,8 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
                         sums_total[i][r] = sums_total[i][r] + sums.total[r]
                     sums_caustic[i][r] = sums_caustic[i][r] + sums.caustic[r]
             traced += sums.photons
+            emitted += sums.emitted
+            cut += sums.cut
             stream += 1
             noises, maps, caustic = [], [], []
             for r in range(n_rec):
@@ -136,10 +165,17 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
             if np.isfinite(noise) and noise <= target:
                 stopped = "target_noise"
                 break
+    cut_fraction = _cut_fraction(emitted, cut)
+    if cut_fraction > CUT_WARNING:
+        warnings.warn(f"{scene.name}: the safety cap of {MAX_SPECULAR_EVENTS} specular events "
+                      f"cut off {cut_fraction:.2e} of the emitted caustic flux "
+                      "(paths trapped by total internal reflection)", CutFluxWarning,
+                      stacklevel=2)
     return ReceiverEstimate(maps=None if caustic_only else tuple(maps), caustic=tuple(caustic),
                             photons=traced, relative_noise=noise, stopped_by=stopped,
                             history=tuple(history), seeds=k, seed=first,
-                            channel_passes=len(tracer.channels))
+                            channel_passes=len(tracer.channels),
+                            cut_fraction=cut_fraction)
 
 
 def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> RenderResult:
@@ -176,7 +212,14 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> Render
         "stopped_by": est.stopped_by,
         "noise_history": [list(h) for h in est.history],
         "event_chains": event_chains_counted(scene),
+        "cut_flux_fraction": est.cut_fraction,
+        "max_specular_events": MAX_SPECULAR_EVENTS,
         "camera_max_depth": camera_max_depth(scene),
+        # ptracer stops at max_depth without telling how much flux it stopped; in
+        # all-paths mode that is the photon tracer's cap + 2, so the photon tracer's
+        # cut_flux_fraction measures the same paths.
+        "camera_cut_flux_fraction": "not measurable in ptracer; same path limit as the "
+                                    "photon tracer (cut_flux_fraction)",
         "camera_integrator": "ptracer",
         "camera_limits": list(CAMERA_LIMITS),
         "scene": scene.name,

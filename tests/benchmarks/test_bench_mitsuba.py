@@ -10,9 +10,10 @@ import time
 
 import pytest
 
+from renderers.mitsuba import photons as module
 from renderers.mitsuba.photons import PhotonTracer
 from renderers.mitsuba.reference import estimate_receivers
-from scenes import load_scene
+from scenes import load_scene, with_settings
 
 pytestmark = pytest.mark.bench
 
@@ -46,3 +47,28 @@ def test_time_to_one_percent_noise(benchmark, glass_sphere):
     print(f"\nglass_sphere 256x256: {est.relative_noise:.4f} relative noise after "
           f"{seconds:.1f} s ({est.photons} photons x {est.seeds} seeds, {est.stopped_by})")
     assert est.stopped_by == "target_noise"
+
+
+def test_cost_of_the_path_limit(request, monkeypatch):
+    """Bunny, all L S+ D paths: photons per second with the old 8-event cap and the
+    64-event safety cap, warm (compiled once first), same seeds, in one run. The
+    ratio is the cost of keeping the light that long TIR chains carry; the cut flux
+    fraction is printed beside each."""
+    pytest.importorskip("pymeshlab")
+    scene = with_settings(load_scene(request.config.rootpath / "scenes" / "bunny.toml"),
+                          {"all_specular_paths": True, "receiver_map": [256, 256]})
+    n, rates = 1 << 21, {}
+    for cap in (8, module.MAX_SPECULAR_EVENTS):
+        monkeypatch.setattr(module, "MAX_SPECULAR_EVENTS", cap)
+        tracer = PhotonTracer(scene, caustic_only=True)
+        tracer.trace(1 << 20, seed=99)  # compile once
+        times = []
+        for seed in range(3):
+            start = time.perf_counter()
+            sums = tracer.trace(n, seed=seed)
+            times.append(time.perf_counter() - start)
+        rates[cap] = n / sorted(times)[1]
+        print(f"\nbunny all paths, cap {cap}: {rates[cap] / 1e6:.3f} M photons/s (median of 3, "
+              f"warm), cut flux fraction {(sums.cut / sums.emitted).max():.2e}")
+    caps = sorted(rates)
+    print(f"cap {caps[1]} / cap {caps[0]} time ratio: {rates[caps[0]] / rates[caps[1]]:.2f}")
