@@ -15,7 +15,7 @@ from tests.conftest import REPO
 FIRST_PARTY = {"harness", "renderers", "reports", "scenes"}
 #: Imported only inside functions that need an optional extra, with the message
 #: naming the extra (pymeshlab: the bunny).
-OPTIONAL = {"pymeshlab": "bunny"}
+OPTIONAL = {"pymeshlab": "bunny", "pyluxcore": "crosscheck"}
 
 
 def _name(requirement: str) -> str:
