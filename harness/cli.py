@@ -92,6 +92,11 @@ def _compare_command(subparsers) -> None:
                    help="exit 3 when a bound fails")
     p.add_argument("--self-contained", action="store_true",
                    help="embed images, plots, scripts in one HTML file per page")
+    p.add_argument("--crosscheck", choices=("luxcore",),
+                   help="also check the reference against an independent renderer "
+                   "(full transport; needs the `crosscheck` extra)")
+    p.add_argument("--crosscheck-photons", type=int, default=4_000_000, metavar="N",
+                   help="photons per seed on each side of the cross-check (default %(default)s)")
     p.add_argument("--cache-dir", help="reference cache root")
     p.add_argument("--no-cache", action="store_true", help="render references without the cache")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
@@ -106,6 +111,22 @@ def _figures_command(subparsers) -> None:
     p.add_argument("--scenes", metavar="DIR", help="scenes folder (default: the bundled scenes)")
     p.add_argument("--cache-dir", help="reference cache root")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+def _crosscheck_command(subparsers) -> None:
+    p = _command(subparsers, "crosscheck", "harness.commands.crosscheck:crosscheck",
+                 "check the reference against an independent renderer (full transport)")
+    p.add_argument("scenes", nargs="*", metavar="SCENE", help=_SCENES_HELP)
+    p.add_argument("--with", dest="other", choices=("luxcore",), required=True,
+                   help="the independent renderer (needs the `crosscheck` extra)")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--photons", type=int, default=4_000_000,
+                   help="Mitsuba photons per seed (default %(default)s)")
+    p.add_argument("--other-photons", type=int, default=4_000_000,
+                   help="LuxCore light paths per film, two films per seed (default %(default)s)")
+    p.add_argument("--seeds", type=int, default=4, help="seeds per side (default %(default)s)")
+    p.add_argument("--fail-on-disagreement", action="store_true",
+                   help="exit 3 when a comparison misses its tolerance")
 
 
 def _check_commands(subparsers) -> None:
@@ -131,7 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for group in (_scene_commands, _render_commands, _compare_command, _figures_command,
-                  _check_commands):
+                  _crosscheck_command, _check_commands):
         group(subparsers)
     return parser
 

@@ -299,6 +299,7 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
         "formulas": METRIC_FORMULAS,
         "convergence": _table(comparison.convergence),
         "cost": _table(comparison.cost),
+        "crosscheck": _table(comparison.crosscheck),
         "plots": _plot_panels(comparison, assets),
         "files": _file_links(comparison, folder),
         "thresholds": _thresholds_summary(comparison),

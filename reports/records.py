@@ -168,6 +168,10 @@ class SceneComparison:
     thresholds : tuple of ThresholdCheck
     stability : dict or None
         Outcome of the numerical-stability checks for this scene, if run.
+    crosscheck : Table or None
+        The reference against an independent renderer, when one was run. Columns:
+        kind (total, encircled, region), label, share, reference_w, other_w, ratio,
+        deviation_pct (100 (ratio - 1)), sigma_pct, z, tolerance_pct, agrees.
     speedup_point : (float, float) or None
         The caustics-mapping (time s, relMSE) that ``speedup`` was computed for;
         the report marks it on the cost plot (when None it takes the Pareto point
@@ -191,6 +195,7 @@ class SceneComparison:
     thresholds: tuple[ThresholdCheck, ...] = ()
     stability: dict[str, Any] | None = None
     speedup_point: tuple[float, float] | None = None
+    crosscheck: Table | None = None
 
     def metric(self, view: str, region: str, metric: str) -> MetricValue:
         """Look one metric up; KeyError if it was not computed."""

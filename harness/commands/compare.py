@@ -15,6 +15,7 @@ from rich.table import Table
 from harness.checks import GOLDEN_DIR, THRESHOLDS_FILE
 from harness.checks.accuracy import golden_checks
 from harness.checks.thresholds import load_thresholds
+from harness.commands.crosscheck import run_crosscheck
 from harness.commands.scene import load_scenes
 from harness.compare.outputs import write_comparison
 from harness.compare.pipeline import STUDIES, CompareOptions, compare_scene
@@ -94,6 +95,13 @@ def compare(args: argparse.Namespace) -> int:
                                    bounds=bounds)
         if checks:
             comparison = dataclasses.replace(comparison, thresholds=checks)
+        if args.crosscheck:
+            cross = run_crosscheck(scene, photons=args.crosscheck_photons,
+                                   seeds=scene.settings.seeds,
+                                   other_photons=args.crosscheck_photons)
+            comparison = dataclasses.replace(
+                comparison, crosscheck=cross.table(),
+                provenance={**comparison.provenance, "crosscheck": cross.provenance})
         folder = scene_folder(scene.name, taken=taken)
         taken.append(folder)
         write_comparison(out_dir / folder, comparison)

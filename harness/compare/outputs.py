@@ -48,6 +48,7 @@ def comparison_json(comparison: SceneComparison) -> dict[str, Any]:
         "claims": comparison.claims,
         "thresholds": [asdict(t) for t in comparison.thresholds],
         "stability": comparison.stability,
+        "crosscheck": comparison.crosscheck.records() if comparison.crosscheck else None,
         "provenance": comparison.provenance,
         "files": comparison.files,
     }

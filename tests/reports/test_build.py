@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from reports import build_report, scene_folder
-from reports.records import METRIC_FORMULAS
+from reports.records import METRIC_FORMULAS, Table
 from tests.reports.conftest import HOSTILE_NAME, decode_uri, hdr_uris
 
 
@@ -137,13 +137,13 @@ def test_provenance_settings_and_claims_are_shown(linked, comparison):
 def test_exr_links_are_relative_and_flag_missing_files(tmp_path, comparison):
     """Links resolve from the scene page; a missing original is marked; a path that
     leaves the scene folder is not linked."""
-    c = replace(comparison, files={"camera/method": "camera_cm.exr",
+    c = replace(comparison, files={"camera/method": "camera_method.exr",
                                    "camera/reference": "../../escape.exr"})
     (tmp_path / "glass_sphere").mkdir()
-    (tmp_path / "glass_sphere" / "camera_cm.exr").write_bytes(b"x")
+    (tmp_path / "glass_sphere" / "camera_method.exr").write_bytes(b"x")
     build_report(tmp_path, [c])
     html = (tmp_path / "glass_sphere" / "index.html").read_text("utf-8")
-    assert '<a href="camera_cm.exr">camera_cm.exr</a></li>' in html
+    assert '<a href="camera_method.exr">camera_method.exr</a></li>' in html
     assert 'href="../../escape.exr"' not in html and "not linked" in html
     build_report(tmp_path, [replace(c, files={"camera/method": "gone.exr"})])
     assert "not found beside this page" in (tmp_path / "glass_sphere" / "index.html").read_text()
@@ -209,3 +209,24 @@ def test_rebuild_overwrites_in_place(tmp_path, comparison):
     assert (tmp_path / "glass_sphere" / "index.html").read_bytes() == first
     assert (tmp_path / "glass_sphere" / "cost_accuracy.svg").read_bytes() == svg
     assert not list(tmp_path.rglob("*.tmp"))
+
+
+def test_crosscheck_section_shows_the_result_when_one_was_run(tmp_path, comparison):
+    """With a cross-check the scene page tables its ratios, noise and verdicts, and
+    names the other renderer; without one it says it was not run and how to run it."""
+    table = Table(("kind", "label", "share", "reference_w", "other_w", "ratio", "deviation_pct",
+                   "sigma_pct", "z", "tolerance_pct", "agrees"),
+                  (("total", "all", 1.0, 4.8402, 4.8368, 1.0007, 0.0703, 0.17, 0.41, 0.5, True),
+                   ("region", "block (3, 4)", 0.011, 0.05, 0.048, 1.0473, 4.73, 5.06, 0.93, 2.0,
+                    False)))
+    provenance = {**comparison.provenance, "crosscheck": {
+        "transport": "full: all L S+ D paths", "other": {"renderer": "luxcore LIGHTCPU"}}}
+    checked = replace(comparison, name="checked", crosscheck=table, provenance=provenance)
+    build_report(tmp_path, [checked, comparison])
+    page = unescape((tmp_path / "checked" / "index.html").read_text("utf-8"))
+    section = page[page.index('<section id="crosscheck">'):]
+    section = section[:section.index("</section>")]
+    assert "luxcore LIGHTCPU" in section and "block (3, 4)" in section
+    assert "0.0703" in section and "4.73" in section and "4.84" in section
+    plain = unescape((tmp_path / "glass_sphere" / "index.html").read_text("utf-8"))
+    assert "Not run (caustics compare --crosscheck luxcore" in re.sub(r"<[^>]+>", "", plain)

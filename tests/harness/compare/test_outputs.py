@@ -20,7 +20,7 @@ def test_write_comparison_round_trip(tmp_path):
         images={"camera/method": image, "camera/ssim": image[..., 0]},
         exposure={"white": 1.0},
         convergence=Table(("estimator", "iteration"), (("modified", 0), ("modified", 1))),
-        files={"camera/method": "camera_cm.exr", "camera/ssim": "camera_ssim.exr"},
+        files={"camera/method": "camera_method.exr", "camera/ssim": "camera_ssim.exr"},
     )
     write_comparison(tmp_path, comparison)
     data = json.loads((tmp_path / "metrics.json").read_text())  # strict JSON parses
@@ -28,6 +28,6 @@ def test_write_comparison_round_trip(tmp_path):
     assert "relmse" in data["formulas"]
     rows = list(csv.reader((tmp_path / "convergence.csv").open()))
     assert rows == [["estimator", "iteration"], ["modified", "0"], ["modified", "1"]]
-    np.testing.assert_array_equal(read_exr(tmp_path / "camera_cm.exr")["RGB"], image)
+    np.testing.assert_array_equal(read_exr(tmp_path / "camera_method.exr")["RGB"], image)
     assert read_exr(tmp_path / "camera_ssim.exr")["RGB"].shape == (6, 8, 3)
     assert not list(tmp_path.glob(".*tmp"))  # no temporary files left behind
