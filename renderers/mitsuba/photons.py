@@ -128,7 +128,8 @@ class PhotonSums:
     photons : int
         Photons emitted (per channel pass).
     emitted : ndarray (3,) float64
-        Sum of the photons' initial weights (flux x photons, W), RGB.
+        Sum of the photons' initial weights (flux x photons, W), RGB (all-paths mode;
+        zero in chain mode, which has no path limit).
     cut : ndarray (3,) float64
         Sum of the weights of paths still alive when the safety cap stopped them
         (all-paths mode; zero otherwise). ``cut / emitted`` is the fraction of the
@@ -296,7 +297,8 @@ class PhotonTracer:
             si = self.receivers_only.scene.ray_intersect(ray)
             self._deposit(si, ray.d, weight, si.is_valid(),
                           receiver_ids=self.receivers_only.receiver_ids, total=total, caustic=None)
-        emitted = _rgb_sum(weight, n)
+        # Only all-paths mode has a path limit to account for; chain mode cuts nothing.
+        emitted = _rgb_sum(weight, n) if self.all_paths else np.zeros(3)
         cut = self._trace_chain(exported, ray, weight, rng=rng, channel=channel, total=total,
                                 caustic=caustic, lanes=n)
         return emitted, cut
