@@ -3,8 +3,8 @@ Playwright, on file:// pages, linked and self-contained.
 
 Skipped with the reason when ``/usr/bin/chromium`` or ``playwright`` is missing,
 except under CI (``CI`` set), where a missing browser is a failure: ``python -m
-harness.system`` installs chromium there and the ``method`` extra installs playwright.
-Screenshots are written to ``method-artifacts/`` at the repository root.
+harness.system`` installs chromium there and the ``test`` extra installs playwright.
+Screenshots are written to ``test-artifacts/`` at the repository root.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from tests.conftest import REPO
 from tests.reports.conftest import HOSTILE_DESCRIPTION, HOSTILE_NAME, decode_uri, hdr_uris
 
 CHROMIUM = Path("/usr/bin/chromium")
-ARTIFACTS = REPO / "method-artifacts"
+ARTIFACTS = REPO / "test-artifacts"
 CHROMIUM_ARGS = [
     "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
     "--disable-background-networking", "--disable-component-update", "--disable-sync",
@@ -35,7 +35,7 @@ def _missing() -> str | None:
         return (f"{CHROMIUM} not found: install Debian's chromium (as root: "
                 "python -m harness.system, or apt-get install -y chromium)")
     if importlib.util.find_spec("playwright") is None:
-        return "the playwright package is missing: pip install -e .[method]"
+        return "the playwright package is missing: pip install -e .[test]"
     return None
 
 
