@@ -21,8 +21,6 @@ def test_reference_command_writes_files_and_keys(tmp_path):
     for key in ("receiver_extent", "event_chains", "photons", "spp", "seed", "relative_noise",
                 "timings", "variant", "cut_flux_fraction", "camera_cut_flux_fraction"):
         assert key in document, key
-    # Chain mode: the chain ends by definition, nothing is cut by a path limit.
-    assert document["cut_flux_fraction"] == 0.0
     assert document["receiver_extent"] == [[-2.0, 2.0, -2.0, 2.0]]
     assert document["seed"] == 3 and document["spp"] == 2
     assert document["photons"] <= 8192 and document["target_noise"] == 0.5

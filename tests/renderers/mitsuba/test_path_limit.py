@@ -51,13 +51,3 @@ def test_a_short_cap_loses_the_bunnys_light_and_says_so(monkeypatch):
         estimate = estimate_receivers(scene, photons=PHOTONS, caustic_only=True,
                                       target_noise=1e-12)
     assert estimate.cut_fraction > 10 * CUT_WARNING
-
-
-def test_chain_mode_cuts_nothing():
-    """Chain mode counts exact chains: nothing is cut by a path limit (the chains it
-    excludes are excluded on purpose), so the recorded fraction is exactly zero."""
-    path = next(p for p in all_scene_files() if p.stem == "glass_sphere")
-    scene = with_settings(load_scene(path), {"receiver_map": [32, 32]})
-    estimate = estimate_receivers(scene, photons=PHOTONS, seeds=1, caustic_only=True,
-                                  target_noise=1e-12)
-    assert estimate.cut_fraction == 0.0
