@@ -387,13 +387,6 @@ class Settings:
 
     section: ClassVar[str] = "`[settings]`"
 
-    @property
-    def splat_sigma_texels(self) -> float:
-        """The splat's standard deviation in caustic-map texels (``splat_sigma`` or
-        its grid-relative default)."""
-        if self.splat_sigma is not None:
-            return float(self.splat_sigma)
-        return 0.5 * self.caustic_map / self.grid
     # caustics mapping
     grid: int = spec(128, doc="Refractive vertex grid resolution (grid × grid).", ge=2, le=4096)
     caustic_map: int = spec(512, doc="Caustic-map resolution per face.", unit="px", ge=8, le=8192)
@@ -401,24 +394,77 @@ class Settings:
         512, doc="Receiver positions-texture resolution per face.", unit="px", ge=8, le=8192
     )
     shadow_map: int = spec(1024, doc="Shadow-map resolution per face.", unit="px", ge=8, le=8192)
-    estimator: Literal["modified", "newton", "secant"] = spec(
-        "modified", doc="Intersection estimator."
+    preset: Literal["paper", "strong"] = spec(
+        "paper", doc="Caustics-mapping preset: `paper` (the paper's choices, as published) "
+        "or `strong` (the best known implementation). Settings left unset (`None`) take "
+        "the preset's value; a setting given in the scene or on the command line wins.",
     )
-    safeguarded: bool = spec(
-        False, doc="Detect oscillation and fall back to bisection on a bracket."
+    estimator: Literal["modified", "newton", "secant"] | None = spec(
+        None, doc="Intersection estimator (preset: paper modified, strong secant)."
     )
-    iterations: int = spec(3, doc="Estimator iterations.", ge=0, le=64)
+    safeguarded: bool | None = spec(
+        None, doc="Detect oscillation and fall back to bisection on a bracket "
+        "(preset: paper false, strong true)."
+    )
+    iterations: int | None = spec(
+        None, doc="Estimator iterations (preset: paper 3, strong 5).", ge=0, le=64
+    )
+    start: Literal["receiver", "fixed"] = spec(
+        "receiver", doc="Start estimate: the receiver seen along the light ray through the "
+        "vertex (d0 = 0, d1 = g(0); the paper's text), or `start_distance` (the appendix "
+        "listing's Newton start).",
+    )
+    start_distance: float = spec(
+        0.10, doc="Start distance of `start = \"fixed\"` (the listing's 0.10).", unit="m", gt=0
+    )
     newton_eps: float | None = spec(
         None,
         doc="Finite-difference step of the Newton estimator; default 1e-3 of the "
         "light-to-receiver distance.", unit="m", gt=0,
     )
+    lookup: Literal["nearest", "filtered"] | None = spec(
+        None, doc="Surface texture reads (receiver positions, object front and back): "
+        "nearest texel, or bilinear within one surface with renormalised normals "
+        "(preset: paper nearest, strong filtered).",
+    )
+    back_resolution: int | None = spec(
+        None, doc="Back-surface (exit) texture resolution per object view "
+        "(preset: paper = grid, strong = 4 x grid).", unit="px", ge=2, le=8192,
+    )
+    frustum: Literal["square", "tight"] | None = spec(
+        None, doc="Object view of the vertex grid: a square frustum around the objects' "
+        "bounding sphere, or a rectangular, asymmetric one fitted to their projection "
+        "(preset: paper square, strong tight).",
+    )
+    verify_hits: bool | None = spec(
+        None, doc="Accept an estimate only if its residual |T(P) - P| is within "
+        "`hit_tolerance` and a receiver is seen at P; else the vertex is `unconverged` "
+        "(preset: paper false, strong true).",
+    )
+    hit_tolerance: float | None = spec(
+        None, doc="Residual a verified hit may have; default one positions-map texel at "
+        "the hit's distance, over the cosine between light ray and receiver normal "
+        "(at most 10).", unit="m", gt=0,
+    )
+    splat_unconverged: bool = spec(
+        False, doc="Splat `unconverged` vertices anyway (they are counted either way)."
+    )
+    splat: Literal["points", "footprint", "triangles"] | None = spec(
+        None, doc="Splat kernel: `points` (the paper's Gaussian of one width), `footprint` "
+        "(a Gaussian per vertex shaped by its neighbours' hits) or `triangles` (the grid's "
+        "quads between neighbouring hits, irradiance = flux / area). All conserve each "
+        "vertex's flux (preset: paper points, strong triangles).",
+    )
     splat_sigma: float | None = spec(
         None,
-        doc="Standard deviation of the Gaussian splat. Default: half the grid spacing, "
-        "0.5 x caustic_map / grid texels, so neighbouring splats blend into a continuous "
-        "caustic (a fixed 1 texel left the grid visible: receiver relMSE 0.57 vs 0.075 "
-        "on water_pool at 128/512).", unit="caustic-map texels", gt=0,
+        doc="Standard deviation of the `points` Gaussian. Default: paper preset "
+        "0.5 x caustic_map / grid (half a grid cell of a grid spanning the caustic map's "
+        "view; about two grid cells under a fitted object frustum); otherwise one mean "
+        "spacing of neighbouring hits on the receiver.", unit="caustic-map texels", gt=0,
+    )
+    footprint_scale: float = spec(
+        0.5, doc="`footprint` splats: the Gaussian's covariance is this squared times the "
+        "outer products of the grid's hit differences (0.5: half the local spacing).", gt=0,
     )
     splat_radius: float = spec(
         3.0, doc="Splat cut-off radius, in standard deviations.", gt=0, le=8

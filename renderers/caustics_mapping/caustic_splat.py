@@ -1,11 +1,16 @@
-"""Pass 3b: the caustic map, Gaussian point sprites of the trace records.
+"""Pass 3b: the caustic map, the trace records splatted with one of three kernels.
 
 Output: an RGBA32F map atlas of ``settings.caustic_map`` texels per face side;
 rgb caustic irradiance E (W/m^2; paper units in paper mode) on the receiver seen
-from the light through that texel, a = accumulated splat weight.
+from the light through that texel, a = accumulated kernel weight. The kernels
+(``points``, ``footprint``, ``triangles``) are described in ``splat_kernels.glsl``;
+:func:`draw_splats` draws them for this pass and for the receiver maps.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import moderngl
 
@@ -14,42 +19,121 @@ from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
 
-__all__ = ["record_vertex_array", "splat_caustic_map"]
+__all__ = ["SPLAT_MODES", "SplatOptions", "draw_splats", "splat_caustic_map"]
+
+#: Kernel names and their shader codes (``splat_kernels.glsl``).
+SPLAT_MODES = {"points": 0, "footprint": 1, "triangles": 2}
+#: Widest triangle drawn (pixels); wider quads fall back to Gaussians.
+MAX_TRIANGLE_PX = 64.0
 
 
-def record_vertex_array(program: moderngl.Program, trace: Trace) -> moderngl.VertexArray:
+@dataclass(frozen=True)
+class SplatOptions:
+    """How records are splatted.
+
+    Attributes
+    ----------
+    mode : {"points", "footprint", "triangles"}
+    sigma : float
+        ``points`` standard deviation (caustic-map texels); the width of Gaussians
+        that have no neighbour to size them.
+    cut : float
+        Gaussian cut-off radius (sigmas).
+    footprint_scale : float
+        ``footprint`` covariance scale.
+    unconverged : bool
+        Splat ``unconverged`` records that lie on a receiver.
+    grid : int
+        Vertex grid per object view (neighbour addressing).
+    """
+
+    mode: str
+    sigma: float
+    cut: float
+    footprint_scale: float
+    unconverged: bool
+    grid: int
+
+
+def _record_vertex_array(program: moderngl.Program, trace: Trace) -> moderngl.VertexArray:
     """The record buffer as point vertices: ``in_hit, in_flux, in_normal``."""
     return program.ctx.vertex_array(
         program, [(trace.records, "32x 4f 4f 4f", "in_hit", "in_flux", "in_normal")]
     )
 
 
-def splat_caustic_map(
-    ctx: moderngl.Context, light: LightSetup, traces: list[Trace], target: moderngl.Texture,
-    *, size: int, faces: tuple[int, ...], sigma: float, cut: float,
-) -> None:
-    """Accumulate every trace's splats into ``target`` (cleared first; a texture of
-    the context's pool)."""
-    fbo = pool(ctx).framebuffer([target])
-    fbo.use()
-    fbo.clear(0.0, 0.0, 0.0, 0.0)
-    program = load_program(ctx, "caustic_splat.glsl")
-    set_light_uniforms(program, light)
-    set_uniform(program, "u_size", size)
-    set_uniform(program, "u_sigma", float(sigma))
-    set_uniform(program, "u_cut", float(cut))
+def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: SplatOptions,
+                *, max_radius: float, uniforms: Callable[[moderngl.Program], None],
+                passes: int = 1, before_pass: Callable[[int], None] | None = None) -> None:
+    """Draw every trace's kernels with program ``name`` into the bound framebuffer,
+    additively. ``uniforms(program)`` sets the pass's own uniforms;
+    ``before_pass(k)`` runs before each of ``passes`` repeats (the caustic map's faces).
+    """
+    gaussians = load_program(ctx, name)
+    programs = [gaussians]
+    if options.mode == "triangles":
+        programs.append(load_program(ctx, name, defines={"TRIANGLES": 1}, geometry=True))
+    for program in programs:
+        uniforms(program)
+        set_uniform(program, "u_grid", options.grid)
+        set_uniform(program, "u_splat_mode", SPLAT_MODES[options.mode])
+        set_uniform(program, "u_footprint_scale", float(options.footprint_scale))
+        set_uniform(program, "u_max_triangle", MAX_TRIANGLE_PX)
+        set_uniform(program, "u_splat_unconverged", int(options.unconverged))
+        set_uniform(program, "u_sigma", float(options.sigma))
+        set_uniform(program, "u_cut", float(options.cut))
+        set_uniform(program, "u_max_radius", float(max_radius))
     ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
     ctx.enable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
     ctx.blend_func = moderngl.ONE, moderngl.ONE
     ctx.blend_equation = moderngl.FUNC_ADD
-    vaos = [record_vertex_array(program, trace) for trace in traces]
-    for slot, face in enumerate(light.map_faces):
+    arrays = []
+    for trace in traces:
+        views = trace.count // (options.grid * options.grid)
+        quads = views * (options.grid - 1) ** 2
+        arrays.append((trace, _record_vertex_array(gaussians, trace), quads,
+                       ctx.vertex_array(programs[-1], []) if len(programs) > 1 else None))
+    for k in range(passes):
+        if before_pass is not None:
+            before_pass(k)
+        for trace, points, quads, triangles in arrays:
+            trace.records.bind_to_storage_buffer(0)
+            points.render(moderngl.POINTS, vertices=trace.count)
+            if triangles is not None and quads > 0:
+                triangles.render(moderngl.POINTS, vertices=quads)
+    ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
+    for _, points, _, triangles in arrays:
+        points.release()
+        if triangles is not None:
+            triangles.release()
+
+
+def splat_caustic_map(
+    ctx: moderngl.Context, light: LightSetup, traces: list[Trace], target: moderngl.Texture,
+    *, size: int, faces: tuple[int, ...], options: SplatOptions,
+) -> None:
+    """Accumulate every trace's splats into ``target`` (cleared first; a texture of
+    the context's pool), one stored map face at a time."""
+    fbo = pool(ctx).framebuffer([target])
+    fbo.use()
+    fbo.clear(0.0, 0.0, 0.0, 0.0)
+
+    def uniforms(program: moderngl.Program) -> None:
+        set_light_uniforms(program, light)
+        set_uniform(program, "u_size", size)
+
+    programs = [load_program(ctx, "caustic_splat.glsl")]
+    if options.mode == "triangles":
+        programs.append(load_program(ctx, "caustic_splat.glsl", defines={"TRIANGLES": 1},
+                                     geometry=True))
+
+    def face(k: int) -> None:
+        slot, index = k, light.map_faces[k]
         fbo.viewport = (slot * size, 0, size, size)
         fbo.scissor = (slot * size, 0, size, size)
-        set_uniform(program, "u_face", face)
-        for vao, trace in zip(vaos, traces, strict=False):
-            vao.render(moderngl.POINTS, vertices=trace.count)
+        for program in programs:
+            set_uniform(program, "u_face", index)
+
+    draw_splats(ctx, "caustic_splat.glsl", traces, options, max_radius=32.0,
+                uniforms=uniforms, passes=len(light.map_faces), before_pass=face)
     fbo.scissor = None
-    ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
-    for vao in vaos:
-        vao.release()

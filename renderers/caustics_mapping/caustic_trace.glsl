@@ -21,7 +21,16 @@
 //   modified (paper):     d <- g(d)
 //   newton (appendix):    f(d) = |T(P(d)) - P(d)|, d <- d - f(d) eps / (f(d+eps) - f(d))
 //   secant (distance impostors): d <- d - h(d) (d - d_prev) / (h(d) - h(d_prev))
-// all starting from d_0 = 0, d_1 = g(0) (the receiver seen along the light ray).
+// starting from d_0 = 0, d_1 = g(0) (the receiver seen along the light ray;
+// u_start = 0) or from d_1 = u_start_distance (u_start = 1, the appendix listing's
+// start; secant's first update is then the modified one, having no previous point).
+// T is read nearest-texel or bilinear within one receiver (u_filtered, common.glsl);
+// the exit surface likewise, at its own resolution u_back_size.
+// Verified hits (u_verify): the final estimate P is accepted only if a receiver is
+// seen at P and |T(P) - P| <= tolerance (u_hit_tolerance, or one positions-map texel
+// at P's distance over |cos| between the light ray and the receiver normal, the
+// cosine clamped at 0.1); otherwise the status is STATUS_UNCONVERGED and the vertex
+// is splatted only with u_splat_unconverged.
 // Safeguarded: a bracket [lo, hi] with h(lo) >= 0 >= h(hi) is kept from every
 // lookup; an update that is non-finite, leaves the bracket, or oscillates (reverses
 // direction without at least halving the step, from the last two estimates) is
@@ -37,13 +46,19 @@ uniform sampler2D u_receiver_normals;
 uniform int u_positions_size;
 uniform sampler2D u_front_positions;      // object atlas, RGBA32F xyz, w object + 1
 uniform sampler2D u_front_normals;
-uniform sampler2D u_back_positions;
+uniform sampler2D u_back_positions;      // object atlas at u_back_size texels per view
 uniform sampler2D u_back_normals;
 uniform int u_grid;
+uniform int u_back_size;
 uniform mat4 u_obj_vp[6];
 uniform int u_obj_cube;
 uniform int u_obj_persp;
-uniform float u_obj_half;
+uniform vec4 u_obj_rect;        // x0, x1, y0, y1 of the object view (tangents or m)
+uniform int u_filtered;         // 1: bilinear reads within one surface
+uniform int u_start;            // 0 receiver (d1 = g(0)), 1 fixed (d1 = u_start_distance)
+uniform float u_start_distance; // m
+uniform int u_verify;           // 1: verified hits
+uniform float u_hit_tolerance;  // m; <= 0: one positions-map texel (see header)
 
 uniform int u_material[8];      // 0 none, 1 closed dielectric, 2 open dielectric, 3 conductor
 uniform vec3 u_ior[8];
@@ -70,13 +85,34 @@ uniform int u_count;            // grid vertices (invocations past it do nothing
 #if defined VERTEX_SHADER || defined COMPUTE_SHADER
 
 // T(x): the receiver seen from the light through x; false when there is none.
+// `texel` is the atlas texel containing x's projection (the receiver normal and
+// (u, v) are read there, or blended like T when filtered).
 bool receiver_at(vec3 x, out vec4 t, out ivec2 texel) {
     int face;
     vec2 ndc;
     t = vec4(0.0);
     if (!map_locate(x, u_positions_size, face, ndc, texel)) return false;
-    t = texelFetch(u_receiver_positions, texel, 0);
+    if (u_filtered == 1) {
+        Bilinear b = bilinear_at(u_receiver_positions, u_map_slot[face], u_positions_size,
+                                 (ndc * 0.5 + 0.5) * float(u_positions_size));
+        t = bilinear_read(u_receiver_positions, b);
+    } else {
+        t = texelFetch(u_receiver_positions, texel, 0);
+    }
     return t.w > 0.5;
+}
+
+// The receiver normal at x (x known to project onto a receiver texel).
+vec3 receiver_normal_at(vec3 x) {
+    int face;
+    vec2 ndc;
+    ivec2 texel;
+    map_locate(x, u_positions_size, face, ndc, texel);
+    if (u_filtered == 0) return texelFetch(u_receiver_normals, texel, 0).xyz;
+    Bilinear b = bilinear_at(u_receiver_positions, u_map_slot[face], u_positions_size,
+                             (ndc * 0.5 + 0.5) * float(u_positions_size));
+    vec3 n = bilinear_read(u_receiver_normals, b).xyz;
+    return dot(n, n) > 0.0 ? normalize(n) : n;
 }
 
 bool lookup_g(vec3 v, vec3 r, float d, out float g, out vec3 t) {
@@ -88,30 +124,94 @@ bool lookup_g(vec3 v, vec3 r, float d, out float g, out vec3 t) {
     return ok;
 }
 
-// The exit surface at x's projection into the object views.
+// The exit surface at x's projection into the object views (u_back_size texels per
+// view): position p and unit normal n; false unless it is `object`'s.
 bool back_at(vec3 x, int object, out vec3 p, out vec3 n) {
     int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
     vec2 ndc;
     p = vec3(0.0);
     n = vec3(0.0);
     if (!project(u_obj_vp[face], x, ndc)) return false;
-    ivec2 t = min(ivec2(floor((ndc * 0.5 + 0.5) * float(u_grid))), ivec2(u_grid - 1));
-    ivec2 a = ivec2(face * u_grid + t.x, t.y);
-    vec4 q = texelFetch(u_back_positions, a, 0);
+    vec2 pix = (ndc * 0.5 + 0.5) * float(u_back_size);
+    vec4 q;
+    if (u_filtered == 1) {
+        Bilinear b = bilinear_at(u_back_positions, face, u_back_size, pix);
+        q = bilinear_read(u_back_positions, b);
+        n = bilinear_read(u_back_normals, b).xyz;
+        if (dot(n, n) > 0.0) n = normalize(n);
+    } else {
+        ivec2 t = min(ivec2(floor(pix)), ivec2(u_back_size - 1));
+        ivec2 a = ivec2(face * u_back_size + t.x, t.y);
+        q = texelFetch(u_back_positions, a, 0);
+        n = texelFetch(u_back_normals, a, 0).xyz;
+    }
     p = q.xyz;
-    n = texelFetch(u_back_normals, a, 0).xyz;
     return abs(q.w - float(object + 1)) < 0.5;
+}
+
+// The exit point v + d r of the ray inside a closed object, and the exit normal bn.
+// Wyman 2005: the back surface B is looked up in the back-surface texture. Start
+// from the back surface along the light ray through v (his d_V) and refine along the
+// refracted ray on e(d) = |B(v + d r) - v| - d: nearest reads take the fixed-point
+// step d <- |B(v + d r) - v|; filtered reads take secant steps on e (the fixed-point
+// step while no two points are known, or when a step leaves (0, 4 d)), which converge
+// where the fixed point creeps (grazing exits). A filtered entry at the silhouette,
+// where no back face lies along the light ray through v, steps 2, 4, 8, 16 back
+// texels inside along r to find one.
+bool find_exit(vec3 v, vec3 r, int object, out float d, out vec3 bn) {
+    vec3 bp;
+    d = 0.0;
+    bool ok = back_at(v, object, bp, bn);
+    if (!ok && u_filtered == 1) {
+        float texel = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z)
+            / float(u_back_size) * (u_obj_persp == 1 ? length(v - u_light_pos) : 1.0);
+        for (int k = 1; k <= 4 && !ok; ++k) ok = back_at(v + texel * exp2(float(k)) * r, object, bp, bn);
+    }
+    if (!ok) return false;
+    d = length(bp - v);
+    float d_prev = 0.0, e_prev = 0.0;
+    bool have_prev = false;
+    for (int k = 0; k < u_exit_iterations; ++k) {
+        vec3 bq, bm;
+        if (!back_at(v + d * r, object, bq, bm)) break;
+        bn = bm;
+        float fixed_point = length(bq - v);
+        float e = fixed_point - d;
+        float next = fixed_point;
+        if (u_filtered == 1 && have_prev && e != e_prev) {
+            float secant = d - e * (d - d_prev) / (e - e_prev);
+            if (secant > 0.0 && secant < 4.0 * d) next = secant;
+        }
+        d_prev = d;
+        e_prev = e;
+        have_prev = true;
+        if (next == d) break;
+        d = next;
+    }
+    if (u_filtered == 1) {                    // the normal at the final estimate
+        vec3 bq, bm;
+        if (back_at(v + d * r, object, bq, bm)) bn = bm;
+    }
+    return true;
 }
 
 int estimate(vec3 v, vec3 r, int hbase, out float d_out) {
     float g0;
     vec3 t;
     d_out = 0.0;
-    if (!lookup_g(v, r, 0.0, g0, t)) {
-        for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
-        return STATUS_LOST;
+    float d, d_prev = 0.0, h_prev = 0.0;
+    bool have_prev = false;      // secant needs a previous point
+    if (u_start == 1) {
+        d = u_start_distance;
+    } else {
+        if (!lookup_g(v, r, 0.0, g0, t)) {
+            for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
+            return STATUS_LOST;
+        }
+        d = g0;
+        h_prev = g0;             // h(0) = g(0) - 0
+        have_prev = true;
     }
-    float d = g0, d_prev = 0.0, h_prev = g0;
     float lo = 0.0, hi = -1.0;   // bracket of the root of h; hi < 0: no upper end yet
     int status = STATUS_HIT;
     history[hbase] = d;
@@ -129,7 +229,9 @@ int estimate(vec3 v, vec3 r, int hbase, out float d_out) {
             prop = g;                               // modified: d <- g(d)
         } else if (u_estimator == 2) {
             float den = h - h_prev;                 // secant on h
-            if (den != 0.0) prop = d - h * (d - d_prev) / den; else finite = false;
+            if (!have_prev) prop = g;               // fixed start: no previous point
+            else if (den != 0.0) prop = d - h * (d - d_prev) / den;
+            else finite = false;
         } else {
             float f = length(t - (v + d * r));      // Newton on f, forward difference
             float g2;
@@ -161,6 +263,7 @@ int estimate(vec3 v, vec3 r, int hbase, out float d_out) {
         }
         d_prev = d;
         h_prev = h;
+        have_prev = true;
         d = prop;
         history[hbase + k] = d;
     }
@@ -215,7 +318,7 @@ void main() {
         flux = u_light_power * max(dot(n, -l), 0.0) / max(u_covered, 1.0);
     } else {
         vec2 ndc = (vec2(tx, ty) + 0.5) / float(u_grid) * 2.0 - 1.0;
-        flux = u_light_power * light_falloff(l) * texel_measure(u_obj_persp, u_obj_half, u_grid, ndc);
+        flux = u_light_power * light_falloff(l) * texel_measure(u_obj_persp, u_obj_rect, u_grid, ndc);
     }
     vec3 mask = u_channel < 0 ? vec3(1.0) : vec3(equal(ivec3(0, 1, 2), ivec3(u_channel)));
     flux *= mask;
@@ -233,21 +336,12 @@ void main() {
         if (fresnel) flux *= fresnel_transmittance(-dot(l, n), 1.0, ior);
     }
     if (material == 1) {
-        // Wyman 2005: the exit point is looked up in the back-surface texture. Start
-        // from the back surface along the light ray through v (his d_V) and refine
-        // along the refracted ray: d <- |B(v + d r) - v|.
-        vec3 bp, bn;
-        if (!back_at(v, object, bp, bn)) {
+        float d;
+        vec3 bn;
+        if (!find_exit(v, r, object, d, bn)) {
             for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
             write_record(base, v, float(view), r, 0.0, v, STATUS_NO_EXIT, flux, -1.0, vec3(0.0));
             return;
-        }
-        float d = length(bp - v);
-        for (int k = 0; k < u_exit_iterations; ++k) {
-            vec3 bq, bm;
-            if (!back_at(v + d * r, object, bq, bm)) break;
-            d = length(bq - v);
-            bn = bm;
         }
         inside = d;
         vec3 exit_point = v + d * r;
@@ -273,10 +367,19 @@ void main() {
     if (status == STATUS_HIT) {
         vec4 t;
         ivec2 texel;
-        if (receiver_at(p, t, texel)) {
+        bool seen = receiver_at(p, t, texel);
+        if (seen) {
             receiver = t.w - 1.0;
-            normal = texelFetch(u_receiver_normals, texel, 0).xyz;
-        } else {
+            normal = receiver_normal_at(p);
+        }
+        if (u_verify == 1) {
+            float tol = u_hit_tolerance;
+            if (tol <= 0.0) {
+                float c = seen ? abs(dot(normal, incident_dir(p))) : 1.0;
+                tol = map_texel_width(p, u_positions_size) / max(c, 0.1);
+            }
+            if (!seen || length(t.xyz - p) > tol) status = STATUS_UNCONVERGED;
+        } else if (!seen) {
             status = STATUS_LOST;
         }
     }

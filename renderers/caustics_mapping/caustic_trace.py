@@ -26,12 +26,58 @@ from renderers.caustics_mapping.uniforms import (
 )
 from scenes.model import ConductorMaterial, DielectricMaterial
 
-__all__ = ["ESTIMATORS", "STATUS", "MaterialTable", "Trace", "material_table", "run_caustic_trace"]
+__all__ = ["ESTIMATORS", "STATUS", "MaterialTable", "Trace", "TraceOptions", "material_table",
+           "run_caustic_trace", "trace_options"]
 
 #: Estimator names and their shader codes.
 ESTIMATORS = {"modified": 0, "newton": 1, "secant": 2}
 #: Record status codes (``common.glsl`` and ``caustic_trace.glsl``).
-STATUS = {"empty": 0, "hit": 1, "lost": 2, "tir": 3, "diverged": 4, "no_exit": 5}
+STATUS = {"empty": 0, "hit": 1, "lost": 2, "tir": 3, "diverged": 4, "no_exit": 5,
+          "unconverged": 6}
+
+
+@dataclass(frozen=True)
+class TraceOptions:
+    """How the trace pass estimates hits (from the resolved settings).
+
+    Attributes
+    ----------
+    estimator, iterations, safeguarded
+        The intersection estimator, its updates, and the bracketing safeguard.
+    eps : float
+        Newton's finite-difference step (m).
+    filtered : bool
+        Bilinear reads of receiver positions and exit surfaces within one surface.
+    start : {"receiver", "fixed"}
+    start_distance : float
+        d1 of the fixed start (m).
+    verify : bool
+        Verified hits (see ``caustic_trace.glsl``); tolerance ``hit_tolerance`` (m,
+        None: one positions-map texel over the cosine).
+    exit_iterations : int
+        Refinements of the image-space exit point (double refraction).
+    """
+
+    estimator: str
+    iterations: int
+    safeguarded: bool
+    eps: float
+    filtered: bool = False
+    start: str = "receiver"
+    start_distance: float = 0.1
+    verify: bool = False
+    hit_tolerance: float | None = None
+    exit_iterations: int = 8
+
+
+def trace_options(settings, eps: float) -> TraceOptions:
+    """:class:`TraceOptions` from resolved :class:`scenes.model.Settings`."""
+    return TraceOptions(
+        estimator=settings.estimator, iterations=settings.iterations,
+        safeguarded=bool(settings.safeguarded), eps=eps,
+        filtered=settings.lookup == "filtered", start=settings.start,
+        start_distance=settings.start_distance, verify=bool(settings.verify_hits),
+        hit_tolerance=settings.hit_tolerance)
 #: Largest number of caustic objects one render handles.
 MAX_OBJECTS = 8
 RECORD_FLOATS = 20
@@ -122,21 +168,22 @@ class Trace:
 def run_caustic_trace(
     ctx: moderngl.Context, light: LightSetup, *, positions: ReceiverPositions,
     front: ObjectSurfaces, back: ObjectSurfaces | None, materials: MaterialTable,
-    grid: int, estimator: str, iterations: int, safeguarded: bool, eps: float,
-    channel: int = -1, paper: bool = False, covered: int = 0, exit_iterations: int = 8,
+    grid: int, options: TraceOptions, back_size: int | None = None, channel: int = -1,
+    paper: bool = False, covered: int = 0,
 ) -> Trace:
     """Run the vertex grid once; returns the record and history buffers.
 
     Parameters
     ----------
+    back_size : int, optional
+        Texels per object view of the exit-surface textures (default ``grid``).
     channel : int
         -1 for all channels, else the one channel (and its IOR) this dispersion
         pass carries.
     paper, covered : bool, int
         The paper's Eq. 6 flux with V = ``covered`` grid texels.
-    exit_iterations : int
-        Refinements of the image-space exit point (double refraction).
     """
+    iterations = options.iterations
     count = len(light.object_views) * grid * grid
     resources = pool(ctx)
     records = resources.buffer(count * RECORD_FLOATS * 4)        # every record is written
@@ -157,17 +204,18 @@ def run_caustic_trace(
                          ("u_reflectance", materials.reflectance)):
         set_uniform(program, name, np.array(values + ((0.0,) * 3,) * pad, np.float32))
     set_uniform(program, "u_fresnel", np.array(materials.fresnel + (0,) * pad, np.int32))
-    set_uniform(program, "u_positions_size", positions.size)
-    set_uniform(program, "u_grid", grid)
-    set_uniform(program, "u_channel", channel)
-    set_uniform(program, "u_paper", int(paper))
-    set_uniform(program, "u_covered", float(covered))
-    set_uniform(program, "u_estimator", ESTIMATORS[estimator])
-    set_uniform(program, "u_safeguarded", int(safeguarded))
-    set_uniform(program, "u_iterations", iterations)
-    set_uniform(program, "u_eps", float(eps))
-    set_uniform(program, "u_exit_iterations", exit_iterations)
-    set_uniform(program, "u_count", count)
+    for name, value in (
+        ("u_positions_size", positions.size), ("u_grid", grid),
+        ("u_back_size", back_size or grid), ("u_channel", channel),
+        ("u_paper", int(paper)), ("u_covered", float(covered)),
+        ("u_estimator", ESTIMATORS[options.estimator]),
+        ("u_safeguarded", int(options.safeguarded)), ("u_iterations", iterations),
+        ("u_eps", float(options.eps)), ("u_exit_iterations", options.exit_iterations),
+        ("u_filtered", int(options.filtered)), ("u_start", int(options.start == "fixed")),
+        ("u_start_distance", float(options.start_distance)), ("u_verify", int(options.verify)),
+        ("u_hit_tolerance", float(options.hit_tolerance or 0.0)), ("u_count", count),
+    ):
+        set_uniform(program, name, value)
     records.bind_to_storage_buffer(0)
     history.bind_to_storage_buffer(1)
     program.run((count + 63) // 64)

@@ -11,14 +11,26 @@
 // * The receiver positions atlas is RGBA32F: xyz world position (m), w receiver
 //   index + 1 (0 = no receiver seen in that texel). Its companion attachments hold
 //   the receiver normal (xyz) and the receiver (u, v) (xy).
-// * Lookups are nearest-texel (texelFetch), exactly what the NumPy mirror in
-//   estimators.py does, so the two can be compared number for number.
+// * Lookups are nearest-texel (texelFetch) or, with `lookup = "filtered"`, bilinear
+//   between the four nearest texels when all four show the same surface (same w),
+//   else nearest. The NumPy mirror in estimators.py does the same arithmetic.
 
 const int STATUS_EMPTY = 0;     // no caustic object at this grid texel
 const int STATUS_HIT = 1;       // splatted
 const int STATUS_LOST = 2;      // a lookup found no receiver: splat dropped
 const int STATUS_TIR = 3;       // total internal reflection at the exit surface
 const int STATUS_DIVERGED = 4;  // the estimator produced a non-finite update
+const int STATUS_UNCONVERGED = 6;  // verified hits: residual above tolerance, or no
+                                   // receiver at the estimate
+
+// Whether a record is splatted: a hit, or (u_splat_unconverged) an unverified
+// estimate that still lies on a receiver (record fields: status, receiver index).
+uniform int u_splat_unconverged;
+bool splatted(float status, float receiver) {
+    int code = int(status + 0.5);
+    return code == STATUS_HIT
+        || (u_splat_unconverged == 1 && code == STATUS_UNCONVERGED && receiver > -0.5);
+}
 
 // ---------------------------------------------------------------- the light
 uniform int u_light_type;      // 0 point, 1 spot, 2 directional
@@ -32,8 +44,8 @@ uniform int u_lambertian;      // 1: intensity * max(cos, 0) about u_light_dir
 uniform mat4 u_map_vp[6];
 uniform int u_map_cube;        // 1: six cube faces, else one view
 uniform int u_map_slot[6];     // atlas slot of each view, -1: not stored
-uniform int u_map_persp;       // 1 perspective (tan half-angle u_map_half), 0 ortho
-uniform float u_map_half;      // tan(half fov) or half-width (m)
+uniform int u_map_persp;       // 1 perspective, 0 orthographic
+uniform vec4 u_map_rect;       // x0, x1, y0, y1 on the view plane: tangents or m
 
 // Unit direction light travels at x.
 vec3 incident_dir(vec3 x) {
@@ -104,14 +116,63 @@ bool map_locate(vec3 x, int size, out int face, out vec2 ndc, out ivec2 texel) {
 }
 
 // Solid angle (sr, perspective) or area perpendicular to the light (m^2,
-// orthographic) of one texel of a square view of `size` texels at NDC `ndc`:
-// d_omega = (2t/size)^2 / (1 + t^2 |ndc|^2)^(3/2)  (a texel on the plane at unit
-// distance, foreshortened by cos^3), or (2h/size)^2.
-float texel_measure(int persp, float half_size, int size, vec2 ndc) {
-    float s = 2.0 * half_size / float(size);
-    if (persp == 0) return s * s;
-    float q = 1.0 + half_size * half_size * dot(ndc, ndc);
-    return s * s / (q * sqrt(q));
+// orthographic) of one texel of a view of `size` x `size` texels spanning `rect` =
+// (x0, x1, y0, y1) on the view plane, at NDC `ndc`. With texel sides
+// s = (x1 - x0, y1 - y0) / size and the texel's view-plane point p at unit distance:
+// d_omega = s.x s.y / (1 + |p|^2)^(3/2) (foreshortened by cos^3), or s.x s.y.
+float texel_measure(int persp, vec4 rect, int size, vec2 ndc) {
+    vec2 s = vec2(rect.y - rect.x, rect.w - rect.z) / float(size);
+    if (persp == 0) return s.x * s.y;
+    vec2 t = ndc * 0.5 + 0.5;
+    vec2 p = vec2(mix(rect.x, rect.y, t.x), mix(rect.z, rect.w, t.y));
+    float q = 1.0 + dot(p, p);
+    return s.x * s.y / (q * sqrt(q));
+}
+
+// Width (m) of one texel of a map view of `size` texels per side at point x:
+// the view-plane texel width times x's distance from the light (perspective), or the
+// texel width itself (orthographic).
+float map_texel_width(vec3 x, int size) {
+    float w = max(u_map_rect.y - u_map_rect.x, u_map_rect.w - u_map_rect.z) / float(size);
+    return u_map_persp == 0 ? w : w * length(x - u_light_pos);
+}
+
+// Bilinear lookup in one face (atlas slot `slot`, `size` texels per side) at face
+// pixel coordinates `pix` (texel centres at k + 0.5). The four texels around `pix`
+// are blended only when their w (a surface tag: receiver or object index + 1) is the
+// same and non-zero; otherwise `ok` is false and the nearest texel stands alone.
+struct Bilinear {
+    ivec2 t00;        // atlas texel of the lower-left of the four
+    vec2 f;           // blend weights along x and y
+    ivec2 nearest;    // atlas texel containing pix
+    bool ok;          // blend (else read `nearest`)
+};
+
+Bilinear bilinear_at(sampler2D tagged, int slot, int size, vec2 pix) {
+    Bilinear b;
+    vec2 q = clamp(pix - 0.5, vec2(0.0), vec2(float(size - 1)));
+    ivec2 i0 = min(ivec2(floor(q)), ivec2(size - 2));
+    b.f = q - vec2(i0);
+    ivec2 base = ivec2(slot * size, 0);
+    b.t00 = base + i0;
+    b.nearest = base + min(ivec2(floor(pix)), ivec2(size - 1));
+    float w00 = texelFetch(tagged, b.t00, 0).w;
+    float w10 = texelFetch(tagged, b.t00 + ivec2(1, 0), 0).w;
+    float w01 = texelFetch(tagged, b.t00 + ivec2(0, 1), 0).w;
+    float w11 = texelFetch(tagged, b.t00 + ivec2(1, 1), 0).w;
+    b.ok = size >= 2 && w00 > 0.5 && abs(w10 - w00) < 0.5 && abs(w01 - w00) < 0.5
+        && abs(w11 - w00) < 0.5;
+    return b;
+}
+
+vec4 bilinear_read(sampler2D tex, Bilinear b) {
+    if (!b.ok) return texelFetch(tex, b.nearest, 0);
+    vec4 a = mix(texelFetch(tex, b.t00, 0), texelFetch(tex, b.t00 + ivec2(1, 0), 0), b.f.x);
+    vec4 c = mix(texelFetch(tex, b.t00 + ivec2(0, 1), 0),
+                 texelFetch(tex, b.t00 + ivec2(1, 1), 0), b.f.x);
+    vec4 r = mix(a, c, b.f.y);
+    r.w = texelFetch(tex, b.nearest, 0).w;   // the tag is never blended
+    return r;
 }
 
 // Area (m^2) on the receiver covered by one caustic-map texel around hit x with
@@ -120,7 +181,7 @@ float texel_measure(int persp, float half_size, int size, vec2 ndc) {
 float map_texel_area(vec3 x, vec3 n, vec2 ndc, int size) {
     vec3 l = incident_dir(x);
     float c = max(abs(dot(n, l)), 1e-3);
-    float m = texel_measure(u_map_persp, u_map_half, size, ndc);
+    float m = texel_measure(u_map_persp, u_map_rect, size, ndc);
     if (u_map_persp == 0) return m / c;
     vec3 dx = x - u_light_pos;
     return m * dot(dx, dx) / c;
@@ -136,33 +197,4 @@ float fresnel_transmittance(float cos_i, float eta_i, float eta_t) {
     float rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
     float rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
     return 1.0 - 0.5 * (rs * rs + rp * rp);
-}
-
-// Normalisation of a discrete Gaussian splat centred at c (pixels; pixel centres at
-// k + 0.5) with standard deviations sigma (pixels) cut off at `cut` sigmas, over the
-// pixels of [lo, hi): sum of exp(-|p - c|^2_sigma / 2). Dividing each fragment's
-// weight by it makes the splat's weights sum to exactly one, whatever the sub-pixel
-// position, so flux is conserved texel for texel.
-float splat_norm(vec2 c, vec2 sigma, float cut, vec2 lo, vec2 hi) {
-    vec2 r = cut * sigma;
-    float total = 0.0;
-    for (float y = floor(c.y - r.y) + 0.5; y <= c.y + r.y; y += 1.0) {
-        if (y < lo.y || y >= hi.y) continue;
-        for (float x = floor(c.x - r.x) + 0.5; x <= c.x + r.x; x += 1.0) {
-            if (x < lo.x || x >= hi.x) continue;
-            vec2 q = (vec2(x, y) - c) / sigma;
-            float e = dot(q, q);
-            if (e <= cut * cut) total += exp(-0.5 * e);
-        }
-    }
-    return total;
-}
-
-// Weight of a Gaussian splat at a fragment: exp(-|q|^2 / 2) with q = (fragment -
-// centre) / sigma (pixels; sigma per axis), or -1 beyond the cut-off radius (in
-// sigmas), where the caller discards the fragment.
-float splat_weight(vec2 fragment, vec2 centre, vec2 sigma, float cut) {
-    vec2 q = (fragment - centre) / sigma;
-    float e = dot(q, q);
-    return e > cut * cut ? -1.0 : exp(-0.5 * e);
 }

@@ -8,6 +8,7 @@ replaced by the shared include of this package.
 
 from __future__ import annotations
 
+import re
 import time
 from dataclasses import dataclass, field
 from functools import cache
@@ -47,16 +48,30 @@ def create_context() -> moderngl.Context:
     return ctx
 
 
+_INCLUDE = re.compile(r'^#include "([A-Za-z0-9_]+\.glsl)"$', re.MULTILINE)
+
+
 @cache
 def _source(name: str) -> str:
-    text = (_HERE / name).read_text()
-    common = (_HERE / "common.glsl").read_text()
-    return text.replace('#include "common.glsl"', common)
+    """The file's text with every ``#include "X.glsl"`` line replaced by that file
+    (itself expanded), each file included once."""
+    seen: set[str] = set()
+
+    def expand(file: str) -> str:
+        def include(match: re.Match) -> str:
+            target = match.group(1)
+            if target in seen:
+                return ""
+            seen.add(target)
+            return expand(target)
+        return _INCLUDE.sub(include, (_HERE / file).read_text())
+
+    return expand(name)
 
 
 def load_program(
     ctx: moderngl.Context, name: str, *, defines: dict[str, object] | None = None,
-    fragment: bool = True, compute: bool = False,
+    fragment: bool = True, compute: bool = False, geometry: bool = False,
 ) -> moderngl.Program | moderngl.ComputeShader:
     """Compile ``name`` (a ``.glsl`` file beside this module) into a program.
 
@@ -73,10 +88,12 @@ def load_program(
         Whether the file has a ``FRAGMENT_SHADER`` section.
     compute : bool
         Compile the file's ``COMPUTE_SHADER`` section alone into a compute shader.
+    geometry : bool
+        Whether the file has a ``GEOMETRY_SHADER`` section.
     """
     cache = ctx.extra if isinstance(ctx.extra, dict) else {}
     ctx.extra = cache
-    key = ("program", name, tuple(sorted((defines or {}).items())), fragment, compute)
+    key = ("program", name, tuple(sorted((defines or {}).items())), fragment, compute, geometry)
     if key in cache:
         return cache[key]
     body = _source(name)
@@ -88,7 +105,8 @@ def load_program(
         return program
     vertex = head + "#define VERTEX_SHADER 1\n" + body
     frag = head + "#define FRAGMENT_SHADER 1\n" + body if fragment else None
-    program = ctx.program(vertex_shader=vertex, fragment_shader=frag)
+    geom = head + "#define GEOMETRY_SHADER 1\n" + body if geometry else None
+    program = ctx.program(vertex_shader=vertex, fragment_shader=frag, geometry_shader=geom)
     cache[key] = program
     return program
 

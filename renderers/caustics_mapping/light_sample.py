@@ -16,10 +16,16 @@ import moderngl
 import numpy as np
 
 from renderers.caustics_mapping.camera import CameraInputs, render_camera
-from renderers.caustics_mapping.caustic_splat import splat_caustic_map
-from renderers.caustics_mapping.caustic_trace import Trace, material_table, run_caustic_trace
+from renderers.caustics_mapping.caustic_splat import SplatOptions, splat_caustic_map
+from renderers.caustics_mapping.caustic_trace import (
+    Trace,
+    material_table,
+    run_caustic_trace,
+    trace_options,
+)
 from renderers.caustics_mapping.context import PassTimer, pool
 from renderers.caustics_mapping.estimators import MapLookup
+from renderers.caustics_mapping.footprint import FALLBACK_TEXELS, mean_hit_spacing_texels
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.lowpass import lowpass_filter
 from renderers.caustics_mapping.meshes import upload_mesh
@@ -68,6 +74,7 @@ class Accumulator:
     lookups: list[MapLookup] = field(default_factory=list)
     covered_total: int = 0
     map_faces: set[int] = field(default_factory=set)
+    splat_sigma: list[float] = field(default_factory=list)
 
     def ran(self, name: str) -> None:
         if name not in self.passes:
@@ -232,8 +239,8 @@ def _trace_objects(state: FrameState, light: LightSetup, *, positions):
     back = None
     if "refraction.double" in state.effects:
         with timer.measure("object_positions.back"):
-            back = render_object_surfaces(ctx, light, setup.objects, grid=s.grid, back=True,
-                                          which=setup.closed)
+            back = render_object_surfaces(ctx, light, setup.objects, grid=s.back_resolution,
+                                          back=True, which=setup.closed)
         acc.ran("object_positions.back")
     for channel in setup.channels:
         name = f"caustic_trace.{setup.paths}" + (
@@ -241,9 +248,8 @@ def _trace_objects(state: FrameState, light: LightSetup, *, positions):
         with timer.measure(name):
             trace = run_caustic_trace(
                 ctx, light, positions=positions, front=front, back=back,
-                materials=setup.materials, grid=s.grid,
-                estimator=s.estimator, iterations=s.iterations,
-                safeguarded=s.safeguarded, eps=setup.eps, channel=channel,
+                materials=setup.materials, grid=s.grid, back_size=s.back_resolution,
+                options=trace_options(s, setup.eps), channel=channel,
                 paper=setup.paper, covered=front.covered)
         acc.ran(name)
         traces.append(trace)
@@ -260,8 +266,17 @@ def _splat_maps(state: FrameState, light: LightSetup, *, faces: tuple[int, ...],
     csize = s.caustic_map
     caustic = resources.texture((len(faces) * csize, csize))
     with timer.measure("caustic_map"):
+        sigma = s.splat_sigma
+        if sigma is None and s.splat == "points":
+            sigma = mean_hit_spacing_texels(traces, light, grid=s.grid, caustic_size=csize)
+        elif sigma is None:
+            sigma = FALLBACK_TEXELS     # only Gaussians without neighbours use it
+        acc.splat_sigma.append(float(sigma))
+        options = SplatOptions(mode=s.splat, sigma=float(sigma), cut=s.splat_radius,
+                               footprint_scale=s.footprint_scale,
+                               unconverged=s.splat_unconverged, grid=s.grid)
         splat_caustic_map(ctx, light, traces, caustic, size=csize, faces=faces,
-                          sigma=s.splat_sigma_texels, cut=s.splat_radius)
+                          options=options)
     acc.ran("caustic_map")
     if s.lowpass:
         with timer.measure("lowpass"):
@@ -274,8 +289,7 @@ def _splat_maps(state: FrameState, light: LightSetup, *, faces: tuple[int, ...],
             target = resources.texture(s.receiver_map)
             splat_receiver_map(ctx, light, traces, target, index=index, receiver=rec,
                                mapping=setup.mappings[index], positions=positions,
-                               caustic_size=csize, sigma=s.splat_sigma_texels,
-                               cut=s.splat_radius)
+                               caustic_size=csize, options=options)
             acc.maps[index] += _read_rgba(target)[:, :, :3]
             resources.give_back(target)
     acc.ran("receiver_map")

@@ -10,10 +10,14 @@ Two kinds of view per light:
 * **object views** hold the caustic object's positions and normals at the vertex
   grid resolution: one frustum fitted tightly around the caustic objects (so the
   grid is spent on the object, not the empty sky), or the six cube faces when the
-  light is inside or very close to the objects' bounding sphere.
+  light is inside or very close to the objects' bounding sphere. The fitted view is
+  a square around the objects' bounding sphere (``frustum = "square"``) or a
+  rectangle fitted to their projection, rotated about the view axis to the smallest
+  area (``frustum = "tight"``).
 
-All views are square and symmetric, so a texel's solid angle (perspective) or area
-(orthographic) has a closed form that the shaders evaluate.
+Views are rectangles on the view plane (square and symmetric but for the tight
+object view), so a texel's solid angle (perspective) or area (orthographic) has a
+closed form that the shaders evaluate (``texel_measure`` in ``common.glsl``).
 """
 
 from __future__ import annotations
@@ -53,13 +57,23 @@ class LightView:
         Perspective (point and spot lights) or orthographic (directional).
     half_size : float
         tan(half field of view) for a perspective view; half-width in metres for an
-        orthographic one.
+        orthographic one (the larger half-extent of a rectangular view).
+    rect : tuple of float, optional
+        (x0, x1, y0, y1): the view's extent on the plane at unit distance (tangents,
+        perspective) or in metres (orthographic); None: (-h, h, -h, h).
     """
 
     name: str
     view_proj: np.ndarray
     perspective: bool
     half_size: float
+    rect: tuple[float, float, float, float] | None = None
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(x0, x1, y0, y1) of :attr:`rect`, or of the square view."""
+        h = self.half_size
+        return self.rect if self.rect is not None else (-h, h, -h, h)
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,6 +165,89 @@ def perspective(t: float, near: float, far: float) -> np.ndarray:
     return m
 
 
+def frustum(rect: tuple[float, float, float, float], near: float, far: float, *,
+            perspective_view: bool) -> np.ndarray:
+    """Asymmetric projection of the view-plane rectangle ``rect`` = (x0, x1, y0, y1):
+    tangents at unit distance (perspective) or metres (orthographic)."""
+    x0, x1, y0, y1 = rect
+    m = np.zeros((4, 4))
+    m[0, 0], m[1, 1] = 2.0 / (x1 - x0), 2.0 / (y1 - y0)
+    if perspective_view:
+        m[0, 2], m[1, 2] = (x1 + x0) / (x1 - x0), (y1 + y0) / (y1 - y0)
+        m[2, 2] = -(far + near) / (far - near)
+        m[2, 3] = -2 * far * near / (far - near)
+        m[3, 2] = -1.0
+    else:
+        m[0, 3], m[1, 3] = -(x1 + x0) / (x1 - x0), -(y1 + y0) / (y1 - y0)
+        m[2, 2] = -2.0 / (far - near)
+        m[2, 3] = -(far + near) / (far - near)
+        m[3, 3] = 1.0
+    return m
+
+
+def _tight_rect(x: np.ndarray, y: np.ndarray) -> tuple[float, tuple[float, ...]]:
+    """The rotation about the view axis (radians, 1-degree steps over a quarter
+    turn) whose axis-aligned bounding rectangle of the points (x, y) on the view
+    plane is smallest, and that rectangle (x0, x1, y0, y1) with a 0.1 % margin (the
+    vertices bound the projection of the triangles exactly; the margin is for rounding)."""
+    angles = np.radians(np.arange(0.0, 90.0, 1.0))
+    c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    xr, yr = c * x - s * y, s * x + c * y
+    area = np.ptp(xr, axis=1) * np.ptp(yr, axis=1)
+    best = int(np.argmin(area))
+    lo = np.array([xr[best].min(), yr[best].min()])
+    hi = np.array([xr[best].max(), yr[best].max()])
+    pad = 1e-3 * (hi - lo) + 1e-9
+    lo, hi = lo - pad, hi + pad
+    return float(angles[best]), (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]))
+
+
+def _rotate_about_view_axis(view: np.ndarray, angle: float) -> np.ndarray:
+    rot = np.eye(4)
+    c, s = math.cos(angle), math.sin(angle)
+    rot[0, :2], rot[1, :2] = (c, -s), (s, c)
+    return rot @ view
+
+
+def _tight_perspective(eye: np.ndarray, points: np.ndarray, name: str):
+    """A rectangular, asymmetric frustum fitted to the points' projection, or None
+    when the light is too close (the cube is used then)."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    center = (lo + hi) / 2
+    radius = float(np.linalg.norm(points - center, axis=1).max())
+    dist = float(np.linalg.norm(center - eye))
+    if dist <= radius * 1.05:
+        return None
+    base = look_at(eye, center - eye, _up_for(center - eye))
+    local = points @ base[:3, :3].T + base[:3, 3]
+    depth = -local[:, 2]
+    if depth.min() <= 0:
+        return None
+    angle, rect = _tight_rect(local[:, 0] / depth, local[:, 1] / depth)
+    if math.atan(max(abs(v) for v in rect)) > _MAX_FITTED_HALF_ANGLE:
+        return None
+    near, far = max(depth.min() * 0.9, dist * 1e-4), depth.max() * 1.1
+    view = _rotate_about_view_axis(base, angle)
+    return LightView(name, frustum(rect, near, far, perspective_view=True) @ view, True,
+                     max(abs(v) for v in rect), rect)
+
+
+def _tight_orthographic(direction: np.ndarray, points: np.ndarray, name: str) -> LightView:
+    """An orthographic view along ``direction`` fitted to the points like
+    :func:`_tight_perspective` (metres instead of tangents)."""
+    base = look_at(np.zeros(3), direction, _up_for(direction))
+    local = points @ base[:3, :3].T
+    angle, rect = _tight_rect(local[:, 0], local[:, 1])
+    depth = local[:, 2].max() - local[:, 2].min()
+    # Eye on the light side of every point, looking along the rays.
+    eye_local = np.array([0.0, 0.0, local[:, 2].max() + 0.05 * depth + 1e-6])
+    eye = base[:3, :3].T @ eye_local
+    near, far = 0.025 * depth + 1e-7, 1.1 * depth + 0.05 * depth + 2e-6
+    view = _rotate_about_view_axis(look_at(eye, direction, _up_for(direction)), angle)
+    return LightView(name, frustum(rect, near, far, perspective_view=False) @ view, False,
+                     max(abs(v) for v in rect), rect)
+
+
 def orthographic(h: float, near: float, far: float) -> np.ndarray:
     """Square symmetric orthographic projection of half-width ``h``."""
     m = np.eye(4)
@@ -232,8 +329,11 @@ def _hammersley(n: int) -> np.ndarray:
     return np.stack([(i + 0.5) / n, bits], axis=1)
 
 
-def light_setups(scene: Scene, geometry: SceneGeometry) -> tuple[LightSetup, ...]:
+def light_setups(scene: Scene, geometry: SceneGeometry, *,
+                 frustum_fit: str = "square") -> tuple[LightSetup, ...]:
     """The scene's light as point-like lights with their views.
+
+    ``frustum_fit`` is ``settings.frustum``: ``"square"`` or ``"tight"`` object views.
 
     An area light becomes ``samples`` Lambertian point lights of intensity
     ``intensity / samples`` on a Hammersley set over the rectangle (paper Section 3.1:
@@ -242,13 +342,16 @@ def light_setups(scene: Scene, geometry: SceneGeometry) -> tuple[LightSetup, ...
     light = scene.light
     everything = _points(geometry, True, True)
     objects = _points(geometry, False, True)
+    tight = frustum_fit == "tight"
+    fit = _tight_perspective if tight else _fitted_perspective
     if isinstance(light, DirectionalLight):
         d = _normalize(light.direction)
         return (LightSetup(
             kind="directional", position=np.zeros(3), direction=d,
             power=np.asarray(light.irradiance, float),
             map_views=(_orthographic_fit(d, everything, "sun"),),
-            object_views=(_orthographic_fit(d, objects, "fitted"),), cube=False,
+            object_views=(_tight_orthographic(d, objects, "fitted") if tight
+                          else _orthographic_fit(d, objects, "fitted"),), cube=False,
         ),)
     if isinstance(light, SpotLight):
         eye = np.asarray(light.position, float)
@@ -258,7 +361,7 @@ def light_setups(scene: Scene, geometry: SceneGeometry) -> tuple[LightSetup, ...
         near, far = _depth_range(everything, eye)
         view = LightView("spot", perspective(math.tan(cutoff), near, far)
                          @ look_at(eye, axis, _up_for(axis)), True, math.tan(cutoff))
-        fitted = _fitted_perspective(eye, objects, "fitted")
+        fitted = fit(eye, objects, "fitted")
         return (LightSetup(
             kind="spot", position=eye, direction=axis, power=np.asarray(light.intensity, float),
             map_views=(view,), object_views=(fitted,) if fitted else (view,), cube=False,
@@ -278,7 +381,7 @@ def light_setups(scene: Scene, geometry: SceneGeometry) -> tuple[LightSetup, ...
         raise TypeError(f"unknown light {light!r}")
     setups = []
     for eye, power, normal in eyes:
-        fitted = _fitted_perspective(eye, objects, "fitted")
+        fitted = fit(eye, objects, "fitted")
         cube = _cube(eye, everything)
         setups.append(LightSetup(
             kind="point", position=eye,

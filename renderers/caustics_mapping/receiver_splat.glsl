@@ -1,19 +1,23 @@
 // Pass 3c: splat the same trace records into one receiver's (u, v) irradiance map
-// (DESIGN.md, radiometric contract). Row 0 of the target is v = vmin, column 0
-// u = umin.
+// (DESIGN.md, radiometric contract), with the kernels of splat_kernels.glsl. Row 0
+// of the target is v = vmin, column 0 u = umin.
 //
 // Output (RGBA32F, u_map_size texels): rgb caustic irradiance E (W/m^2 of receiver
-// surface, like the reference's photon tracer), a = splat weight.
+// surface, like the reference's photon tracer), a = kernel weight.
 // (u, v) of a hit P: an affine map of P when the receiver's (u, v) are affine in
 // position (planes, heightfields), else the (u, v) the positions pass stored at P's
-// texel. The Gaussian has the footprint the splat has in the caustic map:
+// texel. A `points` Gaussian has the footprint the splat has in the caustic map:
 // sigma = u_sigma caustic-map texels, converted to metres on the receiver and then
-// to (u, v) texels; every splat's weights are normalised to sum to one over the
-// map, so the flux splatted here equals the flux splatted into the caustic map.
+// to (u, v) texels; a footprint Gaussian is shaped by its neighbours' (u, v) here.
+// Every kernel's weights sum to one over the map, so each vertex's flux is kept.
+// Irradiance is per unit *surface* area: flux per (u, v) area divided by the surface
+// area per (u, v) area, J = dA / (du dv). For affine (u, v) = (a.P + c, b.P + d) on
+// a surface of normal n, du dv = |(a x b) . n| dA, so J = 1 / |(a x b) . n| (1 on a
+// plane; 1 / |n_z| on a heightfield). Otherwise the mesh's mean is used.
 #include "common.glsl"
 
 uniform int u_receiver;
-uniform int u_caustic_size;        // caustic-map texels per face (footprint)
+uniform int u_caustic_size;        // caustic-map texels per face (points footprint)
 uniform int u_positions_size;      // positions-atlas texels per face (uv lookup)
 uniform sampler2D u_uv_texture;    // positions-pass attachment 2: xy (u, v)
 uniform int u_uv_affine;           // 1: (u, v) = (dot(u_row_u, P,1), dot(u_row_v, P,1))
@@ -22,71 +26,182 @@ uniform vec4 u_row_v;
 uniform float u_uv_per_metre;
 uniform vec4 u_extent;             // umin, umax, vmin, vmax
 uniform ivec2 u_map_size;          // W, H
-uniform float u_sigma;             // caustic-map texels
+uniform float u_sigma;             // points: caustic-map texels
 uniform float u_cut;               // sigmas
 uniform float u_max_radius;        // pixels
 
+#include "splat_kernels.glsl"
+
+#if defined VERTEX_SHADER || defined GEOMETRY_SHADER
+vec2 uv_of(vec3 x) {
+    if (u_uv_affine == 1)
+        return vec2(dot(u_row_u, vec4(x, 1.0)), dot(u_row_v, vec4(x, 1.0)));
+    int face;
+    vec2 ndc;
+    ivec2 texel;
+    map_locate(x, u_positions_size, face, ndc, texel);
+    return texelFetch(u_uv_texture, texel, 0).xy;
+}
+
+// The record's hit in map pixels, when it is splatted onto receiver u_receiver.
+bool to_target(int record, out vec2 pix) {
+    pix = vec2(0.0);
+    vec4 hit = splat_records[record * 5 + 2];
+    float receiver = splat_records[record * 5 + 3].w;
+    if (!splatted(hit.w, receiver) || int(receiver + 0.5) != u_receiver) return false;
+    vec2 span = vec2(u_extent.y - u_extent.x, u_extent.w - u_extent.z);
+    pix = (uv_of(hit.xyz) - u_extent.xz) / span * vec2(u_map_size);
+    return true;
+}
+
+vec4 target_position(vec2 pix) {
+    return vec4(pix / vec2(u_map_size) * 2.0 - 1.0, 0.0, 1.0);
+}
+
+// Surface area per (u, v) area at a point of unit normal n (see the header).
+float uv_jacobian(vec3 n) {
+    if (u_uv_affine == 0) return 1.0 / (u_uv_per_metre * u_uv_per_metre);
+    return 1.0 / max(abs(dot(cross(u_row_u.xyz, u_row_v.xyz), n)), 1e-6);
+}
+
+float texel_area() {                // (u, v) units^2
+    vec2 span = vec2(u_extent.y - u_extent.x, u_extent.w - u_extent.z);
+    return span.x * span.y / float(u_map_size.x * u_map_size.y);
+}
+#endif
+
+#if defined TRIANGLES
+#if defined VERTEX_SHADER
+flat out int v_quad;
+void main() {
+    v_quad = gl_VertexID;
+    gl_Position = vec4(0.0);
+}
+#elif defined GEOMETRY_SHADER
+layout(points) in;
+layout(triangle_strip, max_vertices = 8) out;
+flat in int v_quad[];
+flat out vec2 g_a;
+flat out vec2 g_b;
+flat out vec2 g_c;
+flat out vec2 g_lo;
+flat out vec3 g_value;
+
+void emit_triangle(vec2 a, vec2 b, vec2 c, vec3 pa, vec3 pb, vec3 pc, vec3 n, vec3 flux) {
+    vec2 e1 = b - a, e2 = c - a;
+    float pixels = 0.5 * abs(e1.x * e2.y - e1.y * e2.x);        // area in map pixels
+    if (!(pixels > 0.0)) return;
+    float surface = pixels * texel_area() * uv_jacobian(n);     // m^2
+    vec2 lo = floor(min(min(a, b), c));
+    vec2 hi = max(ceil(max(max(a, b), c)), lo + 1.0);
+    g_a = a - lo;
+    g_b = b - lo;
+    g_c = c - lo;
+    g_lo = lo;
+    g_value = flux / surface;                                   // W/m^2
+    vec2 corner[4] = vec2[4](lo, vec2(hi.x, lo.y), vec2(lo.x, hi.y), hi);
+    for (int k = 0; k < 4; ++k) {
+        gl_Position = target_position(corner[k]);
+        EmitVertex();
+    }
+    EndPrimitive();
+}
+
+void main() {
+    int per_view = (u_grid - 1) * (u_grid - 1);
+    int view = v_quad[0] / per_view;
+    int local = v_quad[0] - view * per_view;
+    int qx = local % (u_grid - 1), qy = local / (u_grid - 1);
+    vec2 c[4];
+    if (!quad_drawn(view, qx, qy, c)) return;
+    int i0 = grid_record(view, qx, qy), i1 = grid_record(view, qx + 1, qy);
+    int i2 = grid_record(view, qx + 1, qy + 1), i3 = grid_record(view, qx, qy + 1);
+    vec3 flux = 0.25 * (splat_records[i0 * 5 + 3].rgb + splat_records[i1 * 5 + 3].rgb
+                        + splat_records[i2 * 5 + 3].rgb + splat_records[i3 * 5 + 3].rgb);
+    vec3 p0 = splat_records[i0 * 5 + 2].xyz, p1 = splat_records[i1 * 5 + 2].xyz;
+    vec3 p2 = splat_records[i2 * 5 + 2].xyz, p3 = splat_records[i3 * 5 + 2].xyz;
+    // The receiver's normal (mean of the corners'): a normal taken from the hits
+    // themselves would tilt with their rounding on tiny triangles and, since only
+    // |cos| <= 1 enters, always inflate the area (lost 4e-4 of the flux).
+    vec3 n = splat_records[i0 * 5 + 4].xyz + splat_records[i1 * 5 + 4].xyz
+        + splat_records[i2 * 5 + 4].xyz + splat_records[i3 * 5 + 4].xyz;
+    n = dot(n, n) > 0.0 ? normalize(n) : vec3(0.0, 0.0, 1.0);
+    emit_triangle(c[0], c[1], c[2], p0, p1, p2, n, 0.5 * flux);
+    emit_triangle(c[0], c[2], c[3], p0, p2, p3, n, 0.5 * flux);
+}
+#elif defined FRAGMENT_SHADER
+flat in vec2 g_a;
+flat in vec2 g_b;
+flat in vec2 g_c;
+flat in vec2 g_lo;
+flat in vec3 g_value;
+out vec4 out_irradiance;
+void main() {
+    vec2 rel = floor(gl_FragCoord.xy) - g_lo;
+    float covered = pixel_coverage(g_a - rel, g_b - rel, g_c - rel);
+    if (covered <= 0.0) discard;
+    out_irradiance = vec4(g_value * covered, covered);
+}
+#endif
+
+#else  // Gaussians
 #if defined VERTEX_SHADER
 in vec4 in_hit;
 in vec4 in_flux;
 in vec4 in_normal;
 flat out vec3 v_value;
 flat out vec2 v_center;
-flat out vec2 v_sigma;
+flat out mat2 v_inverse;
 void main() {
     v_value = vec3(0.0);
     v_center = vec2(0.0);
-    v_sigma = vec2(1.0);
+    v_inverse = mat2(1.0);
     gl_PointSize = 1.0;
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
-    if (int(in_hit.w + 0.5) != STATUS_HIT || int(in_flux.w + 0.5) != u_receiver) return;
+    vec2 c;
+    if (!to_target(gl_VertexID, c)) return;
+    int per_view = u_grid * u_grid;
+    int view = gl_VertexID / per_view;
+    int local = gl_VertexID - view * per_view;
+    int tx = local % u_grid, ty = local / u_grid;
+    float share = gaussian_share(view, tx, ty);
+    if (share <= 0.0) return;
+    vec2 size = vec2(u_map_size);
+    vec2 span = vec2(u_extent.y - u_extent.x, u_extent.w - u_extent.z);
+    // The points width in map pixels: u_sigma caustic-map texels at the hit, in
+    // metres on the receiver, in (u, v), in pixels.
     int face;
     vec2 ndc;
     ivec2 texel;
-    if (!map_locate(in_hit.xyz, u_caustic_size, face, ndc, texel)) return;
+    map_locate(in_hit.xyz, u_caustic_size, face, ndc, texel);
     float metres = u_sigma * sqrt(map_texel_area(in_hit.xyz, in_normal.xyz, ndc, u_caustic_size));
-    vec2 uv;
-    if (u_uv_affine == 1) {
-        uv = vec2(dot(u_row_u, vec4(in_hit.xyz, 1.0)), dot(u_row_v, vec4(in_hit.xyz, 1.0)));
-    } else {
-        map_locate(in_hit.xyz, u_positions_size, face, ndc, texel);
-        uv = texelFetch(u_uv_texture, texel, 0).xy;
-    }
-    vec2 size = vec2(u_map_size);
-    vec2 span = vec2(u_extent.y - u_extent.x, u_extent.w - u_extent.z);
-    // Map pixels. A hit whose estimate P lies just off the (u, v) domain (its lookup
-    // found this receiver, so it is at the edge) is clamped onto the border texels,
-    // so no flux is lost between the caustic map and this map.
-    vec2 c = clamp((uv - u_extent.xz) / span * size, vec2(0.5), size - 0.5);
     vec2 sigma = max(metres * u_uv_per_metre / span * size, vec2(0.5));
-    sigma = min(sigma, vec2(u_max_radius / u_cut));
-    float norm = splat_norm(c, sigma, u_cut, vec2(0.0), size);
+    // A hit whose estimate P lies just off the (u, v) domain (its lookup found this
+    // receiver, so it is at the edge) is clamped onto the border texels, so no flux
+    // is lost between the caustic map and this map.
+    c = clamp(c, vec2(0.5), size - 0.5);
+    mat2 cov = u_splat_mode == SPLAT_POINTS ? mat2(sigma.x * sigma.x, 0.0, 0.0, sigma.y * sigma.y)
+        : footprint_covariance(view, tx, ty, c, max(sigma.x, sigma.y));
+    float radius = fit_radius(cov, u_cut, u_max_radius);
+    mat2 inv = inverse(cov);
+    float norm = gaussian_norm(c, inv, radius, u_cut, vec2(0.0), size);
     if (!(norm > 0.0)) return;
-    float texel_area = span.x * span.y / (size.x * size.y);        // (u, v) units^2
-    // Irradiance is per unit *surface* area: divide by the surface area per unit
-    // (u, v) area, J = dA / (du dv). For affine (u, v) = (a.P + c, b.P + d) on a
-    // surface of normal n, du dv = |(a x b) . n| dA, so J = 1 / |(a x b) . n|
-    // (1 on a plane; 1 / |n_z| on a heightfield). Otherwise use the mesh's mean.
-    float jacobian = 1.0 / (u_uv_per_metre * u_uv_per_metre);
-    if (u_uv_affine == 1) {
-        float c = abs(dot(cross(u_row_u.xyz, u_row_v.xyz), normalize(in_normal.xyz)));
-        jacobian = 1.0 / max(c, 1e-6);
-    }
-    v_value = in_flux.rgb / (norm * texel_area * jacobian);
+    v_value = share * in_flux.rgb / (norm * texel_area() * uv_jacobian(normalize(in_normal.xyz)));
     v_center = c;
-    v_sigma = sigma;
-    // Pixel centres within ceil(cut * sigma) of c: every texel the cut-off reaches.
-    gl_PointSize = 2.0 * ceil(u_cut * max(sigma.x, sigma.y)) + 1.0;
-    gl_Position = vec4(c / size * 2.0 - 1.0, 0.0, 1.0);
+    v_inverse = inv;
+    gl_PointSize = 2.0 * ceil(radius) + 1.0;
+    gl_Position = target_position(c);
 }
 #elif defined FRAGMENT_SHADER
 flat in vec3 v_value;
 flat in vec2 v_center;
-flat in vec2 v_sigma;
+flat in mat2 v_inverse;
 out vec4 out_irradiance;
 void main() {
-    float w = splat_weight(gl_FragCoord.xy, v_center, v_sigma, u_cut);
-    if (w < 0.0) discard;
-    out_irradiance = vec4(v_value * w, w);
+    vec2 q = gl_FragCoord.xy - v_center;
+    float e = dot(q, v_inverse * q);
+    if (e > u_cut * u_cut) discard;
+    out_irradiance = vec4(v_value * exp(-0.5 * e), exp(-0.5 * e));
 }
+#endif
 #endif

@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from renderers.caustics_mapping.caustic_splat import record_vertex_array
+from renderers.caustics_mapping.caustic_splat import SplatOptions, draw_splats
 from renderers.caustics_mapping.caustic_trace import Trace
-from renderers.caustics_mapping.context import load_program, pool
+from renderers.caustics_mapping.context import pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.receiver_positions import ReceiverPositions
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
@@ -67,35 +67,27 @@ def uv_mapping(receiver: ReceiverGeometry) -> UvMapping:
 def splat_receiver_map(
     ctx: moderngl.Context, light: LightSetup, traces: list[Trace], target: moderngl.Texture,
     *, index: int, receiver: ReceiverGeometry, mapping: UvMapping,
-    positions: ReceiverPositions, caustic_size: int, sigma: float, cut: float,
+    positions: ReceiverPositions, caustic_size: int, options: SplatOptions,
 ) -> None:
     """Accumulate the splats that landed on receiver ``index`` into ``target``
     (cleared first; a texture of the context's pool)."""
     fbo = pool(ctx).framebuffer([target])
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0)
-    program = load_program(ctx, "receiver_splat.glsl")
-    set_light_uniforms(program, light)
-    positions.uvs.use(location=0)
-    set_uniform(program, "u_uv_texture", 0)
-    set_uniform(program, "u_receiver", index)
-    set_uniform(program, "u_caustic_size", caustic_size)
-    set_uniform(program, "u_positions_size", positions.size)
-    set_uniform(program, "u_uv_affine", int(mapping.affine))
-    set_uniform(program, "u_row_u", tuple(float(x) for x in mapping.rows[0]))
-    set_uniform(program, "u_row_v", tuple(float(x) for x in mapping.rows[1]))
-    set_uniform(program, "u_uv_per_metre", mapping.uv_per_metre)
-    set_uniform(program, "u_extent", tuple(float(x) for x in receiver.extent))
-    set_uniform(program, "u_map_size", target.size)
-    set_uniform(program, "u_sigma", float(sigma))
-    set_uniform(program, "u_cut", float(cut))
-    set_uniform(program, "u_max_radius", MAX_RADIUS_PX)
-    ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
-    ctx.enable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
-    ctx.blend_func = moderngl.ONE, moderngl.ONE
-    ctx.blend_equation = moderngl.FUNC_ADD
-    for trace in traces:
-        vao = record_vertex_array(program, trace)
-        vao.render(moderngl.POINTS, vertices=trace.count)
-        vao.release()
-    ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
+
+    def uniforms(program: moderngl.Program) -> None:
+        set_light_uniforms(program, light)
+        positions.uvs.use(location=0)
+        set_uniform(program, "u_uv_texture", 0)
+        set_uniform(program, "u_receiver", index)
+        set_uniform(program, "u_caustic_size", caustic_size)
+        set_uniform(program, "u_positions_size", positions.size)
+        set_uniform(program, "u_uv_affine", int(mapping.affine))
+        set_uniform(program, "u_row_u", tuple(float(x) for x in mapping.rows[0]))
+        set_uniform(program, "u_row_v", tuple(float(x) for x in mapping.rows[1]))
+        set_uniform(program, "u_uv_per_metre", mapping.uv_per_metre)
+        set_uniform(program, "u_extent", tuple(float(x) for x in receiver.extent))
+        set_uniform(program, "u_map_size", target.size)
+
+    draw_splats(ctx, "receiver_splat.glsl", traces, options, max_radius=MAX_RADIUS_PX,
+                uniforms=uniforms)

@@ -7,6 +7,7 @@ and the caustic map, for the CLI's outputs, the NumPy mirror and convergence stu
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import moderngl
@@ -27,6 +28,7 @@ from renderers.caustics_mapping.light_sample import (
 )
 from renderers.caustics_mapping.lights import CUBE_FACES, LightSetup, light_setups
 from renderers.caustics_mapping.metadata import MethodMetadata
+from renderers.caustics_mapping.presets import resolve_settings
 from renderers.results import ReceiverMap, RenderResult
 from scenes import Scene, effects_of
 from scenes.geometry import SceneGeometry, build_geometry
@@ -116,6 +118,7 @@ def _frame(scene: Scene, ctx: moderngl.Context | None, geometry: SceneGeometry |
 
 def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
             want_lookups: bool, want_atlas: bool) -> Frame:
+    scene = dataclasses.replace(scene, settings=resolve_settings(scene.settings))
     s = scene.settings
     effects = effects_of(scene)
     timer = PassTimer(ctx)
@@ -126,7 +129,7 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
         maps=[np.zeros((s.receiver_map[1], s.receiver_map[0], 3), np.float32)
               for _ in geometry.receivers])
     state = FrameState(scene, ctx, geometry, effects, timer, setup, acc)
-    lights = light_setups(scene, geometry)
+    lights = light_setups(scene, geometry, frustum_fit=s.frustum)
     for light_index, sample in enumerate(lights):
         render_light_sample(state, sample, light_index=light_index,
                             want_lookups=want_lookups, want_atlas=want_atlas)

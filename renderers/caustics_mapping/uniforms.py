@@ -40,7 +40,7 @@ def set_light_uniforms(program: moderngl.Program, light: LightSetup) -> None:
     set_uniform(program, "u_map_cube", int(light.cube))
     set_uniform(program, "u_map_slot", np.array(light.slots, np.int32))
     set_uniform(program, "u_map_persp", int(light.map_views[0].perspective))
-    set_uniform(program, "u_map_half", float(light.map_views[0].half_size))
+    set_uniform(program, "u_map_rect", tuple(float(x) for x in light.map_views[0].bounds))
 
 
 def set_object_view_uniforms(program: moderngl.Program, light: LightSetup) -> None:
@@ -50,4 +50,4 @@ def set_object_view_uniforms(program: moderngl.Program, light: LightSetup) -> No
     set_uniform(program, "u_obj_cube", int(len(views) == 6))
     set_uniform(program, "u_obj_views", len(views))
     set_uniform(program, "u_obj_persp", int(views[0].perspective))
-    set_uniform(program, "u_obj_half", float(views[0].half_size))
+    set_uniform(program, "u_obj_rect", tuple(float(x) for x in views[0].bounds))

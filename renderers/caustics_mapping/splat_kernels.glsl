@@ -1,0 +1,203 @@
+// Splat kernels shared by the caustic-map and receiver-map passes (included after
+// common.glsl). Every kernel conserves each grid vertex's flux exactly in the
+// target it is drawn into:
+//   points     one Gaussian of a fixed width per vertex (the paper's splat);
+//   footprint  one Gaussian per vertex whose covariance is footprint_scale^2 times
+//              the outer products of the grid's hit differences along x and y
+//              (ray differentials of the grid; Wyman & Dachsbacher 2006, Frisvad et
+//              al. 2014), plus (0.5 px)^2 so no splat falls between pixel centres;
+//   triangles  each grid quad whose four corners all land on the target becomes two
+//              triangles between the hits, of constant irradiance flux / area
+//              (webgl-water; Ernst et al. 2005). A vertex gives a quarter of its flux
+//              to each of its four quads; the quarters of quads that cannot be drawn
+//              (a corner missing, on another receiver or face, a fold where the
+//              quad's two triangles have opposite orientation, or a triangle wider
+//              than u_max_triangle pixels) go to a footprint Gaussian of the vertex.
+// Triangles are drawn exactly: each pixel of a triangle's bounding box gets the
+// triangle's irradiance times the area of the pixel the triangle covers (polygon
+// clipping; pixels wholly inside or outside are decided by the edge functions
+// first), so the pixels' weights sum to the triangle's area.
+//
+// The record buffer (caustic_trace.glsl's layout) is read as an SSBO: record i is
+// grid vertex (view, tx, ty) with i = (view * u_grid + ty) * u_grid + tx.
+//
+// Each pass defines, before including this file:
+//   bool to_target(int record, out vec2 pix)  // the record's hit in target pixels,
+//                                            // false if it is not splatted there
+
+layout(std430, binding = 0) readonly buffer SplatRecords { vec4 splat_records[]; };
+
+uniform int u_grid;               // vertex grid per object view
+uniform int u_splat_mode;         // 0 points, 1 footprint, 2 triangles
+uniform float u_footprint_scale;  // footprint covariance scale
+uniform float u_max_triangle;     // pixels: wider triangles fall back to Gaussians
+
+const int SPLAT_POINTS = 0;
+const int SPLAT_FOOTPRINT = 1;
+const int SPLAT_TRIANGLES = 2;
+
+#if defined VERTEX_SHADER || defined GEOMETRY_SHADER
+bool to_target(int record, out vec2 pix);
+
+int grid_record(int view, int tx, int ty) {
+    return (view * u_grid + ty) * u_grid + tx;
+}
+
+// The hit of neighbour (tx + dx, ty + dy) in target pixels, if it is splatted there
+// and on the same receiver as `receiver`.
+bool neighbour(int view, int tx, int ty, int dx, int dy, float receiver, out vec2 pix) {
+    pix = vec2(0.0);
+    int x = tx + dx, y = ty + dy;
+    if (x < 0 || y < 0 || x >= u_grid || y >= u_grid) return false;
+    int i = grid_record(view, x, y);
+    if (abs(splat_records[i * 5 + 3].w - receiver) > 0.5) return false;
+    return to_target(i, pix);
+}
+
+// Derivative of the hit along one grid axis (target pixels per grid step): central
+// difference, or one-sided where a neighbour is missing; false when both are.
+bool grid_derivative(int view, int tx, int ty, ivec2 axis, float receiver, vec2 centre,
+                     out vec2 derivative) {
+    vec2 a, b;
+    bool has_a = neighbour(view, tx, ty, axis.x, axis.y, receiver, a);
+    bool has_b = neighbour(view, tx, ty, -axis.x, -axis.y, receiver, b);
+    derivative = has_a && has_b ? 0.5 * (a - b) : has_a ? a - centre : has_b ? centre - b
+        : vec2(0.0);
+    return has_a || has_b;
+}
+
+// Covariance (target pixels^2) of a footprint splat of record (view, tx, ty) hit at
+// `centre`; `fallback_sigma` (pixels) where no neighbour is known.
+mat2 footprint_covariance(int view, int tx, int ty, vec2 centre, float fallback_sigma) {
+    float receiver = splat_records[grid_record(view, tx, ty) * 5 + 3].w;
+    vec2 ex, ey;
+    bool has_x = grid_derivative(view, tx, ty, ivec2(1, 0), receiver, centre, ex);
+    bool has_y = grid_derivative(view, tx, ty, ivec2(0, 1), receiver, centre, ey);
+    if (!has_x && !has_y) return mat2(fallback_sigma * fallback_sigma);
+    if (!has_x) ex = vec2(-ey.y, ey.x);      // square cell: the missing axis turned 90°
+    if (!has_y) ey = vec2(-ex.y, ex.x);
+    float k = u_footprint_scale * u_footprint_scale;
+    return k * (outerProduct(ex, ex) + outerProduct(ey, ey)) + mat2(0.25);
+}
+
+// Whether quad (qx, qy) (corners (qx, qy), (qx+1, qy), (qx+1, qy+1), (qx, qy+1))
+// is drawn as two triangles, and its corners in target pixels.
+bool quad_drawn(int view, int qx, int qy, out vec2 c[4]) {
+    for (int k = 0; k < 4; ++k) c[k] = vec2(0.0);
+    if (qx < 0 || qy < 0 || qx >= u_grid - 1 || qy >= u_grid - 1) return false;
+    int corner[4] = int[4](grid_record(view, qx, qy), grid_record(view, qx + 1, qy),
+                           grid_record(view, qx + 1, qy + 1), grid_record(view, qx, qy + 1));
+    float receiver = splat_records[corner[0] * 5 + 3].w;
+    for (int k = 0; k < 4; ++k) {
+        if (abs(splat_records[corner[k] * 5 + 3].w - receiver) > 0.5) return false;
+        if (!to_target(corner[k], c[k])) return false;
+    }
+    vec2 lo = min(min(c[0], c[1]), min(c[2], c[3]));
+    vec2 hi = max(max(c[0], c[1]), max(c[2], c[3]));
+    if (any(greaterThan(hi - lo, vec2(u_max_triangle)))) return false;
+    vec2 e1 = c[1] - c[0], e2 = c[2] - c[0], e3 = c[3] - c[0];
+    float a1 = e1.x * e2.y - e1.y * e2.x;     // twice the signed areas
+    float a2 = e2.x * e3.y - e2.y * e3.x;
+    return a1 * a2 > 0.0;                     // same orientation, neither degenerate
+}
+
+// Share of a vertex's flux that its Gaussian carries with triangle splats: the
+// quarters of its four quads that are not drawn (1 with the other kernels).
+float gaussian_share(int view, int tx, int ty) {
+    if (u_splat_mode != SPLAT_TRIANGLES) return 1.0;
+    float drawn = 0.0;
+    vec2 c[4];
+    for (int dy = -1; dy <= 0; ++dy)
+        for (int dx = -1; dx <= 0; ++dx)
+            if (quad_drawn(view, tx + dx, ty + dy, c)) drawn += 1.0;
+    return 1.0 - 0.25 * drawn;
+}
+
+// Sum over the pixels of [lo, hi) within `cut` Mahalanobis radii of c of
+// exp(-q^T S^-1 q / 2), q = pixel centre - c: each fragment's weight divided by it
+// makes the splat's weights sum to one whatever its sub-pixel position.
+float gaussian_norm(vec2 c, mat2 inv, float radius, float cut, vec2 lo, vec2 hi) {
+    float total = 0.0;
+    for (float y = floor(c.y - radius) + 0.5; y <= c.y + radius; y += 1.0) {
+        if (y < lo.y || y >= hi.y) continue;
+        for (float x = floor(c.x - radius) + 0.5; x <= c.x + radius; x += 1.0) {
+            if (x < lo.x || x >= hi.x) continue;
+            vec2 q = vec2(x, y) - c;
+            float e = dot(q, inv * q);
+            if (e <= cut * cut) total += exp(-0.5 * e);
+        }
+    }
+    return total;
+}
+
+// The Gaussian's covariance shrunk so its cut-off radius fits `max_radius` pixels;
+// returns the radius (pixels) its sprite must reach. Only the part above
+// (0.5 px)^2 I is shrunk, so no axis falls below half a pixel (a thinner ellipse
+// could miss every pixel centre and drop the vertex's flux).
+float fit_radius(inout mat2 cov, float cut, float max_radius) {
+    float tr = cov[0][0] + cov[1][1];
+    float det = determinant(cov);
+    float largest = 0.5 * tr + sqrt(max(0.25 * tr * tr - det, 0.0));
+    float radius = cut * sqrt(largest);
+    float limit = (max_radius / cut) * (max_radius / cut);
+    if (radius > max_radius && largest > 0.25 && limit > 0.25) {
+        float s = (limit - 0.25) / (largest - 0.25);
+        cov = s * (cov - mat2(0.25)) + mat2(0.25);
+        radius = max_radius;
+    }
+    return radius;
+}
+#endif
+
+// Area of the part of triangle (a, b, c) inside the unit pixel [0, 1]^2 (all in
+// pixel units relative to that pixel's lower-left corner): Sutherland-Hodgman
+// clipping against the pixel's four edges, then the shoelace formula.
+float pixel_coverage(vec2 a, vec2 b, vec2 c) {
+    // Edge functions at the pixel's corners, signed so that inside is positive.
+    float orientation = sign((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+    vec2 edges[3] = vec2[3](a, b, c);
+    bool inside = true;
+    for (int i = 0; i < 3; ++i) {
+        vec2 p = edges[i], q = edges[i < 2 ? i + 1 : 0];
+        vec2 e = orientation * vec2(p.y - q.y, q.x - p.x);   // inward normal
+        float at0 = dot(e, -p);                             // corner (0, 0)
+        float lowest = at0 + min(e.x, 0.0) + min(e.y, 0.0);
+        float highest = at0 + max(e.x, 0.0) + max(e.y, 0.0);
+        if (highest <= 0.0) return 0.0;                     // wholly outside this edge
+        inside = inside && lowest >= 0.0;
+    }
+    if (inside) return 1.0;
+    vec2 lo = min(min(a, b), c), hi = max(max(a, b), c);
+    if (all(greaterThanEqual(lo, vec2(0.0))) && all(lessThanEqual(hi, vec2(1.0))))
+        return 0.5 * abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+    vec2 poly[9];
+    vec2 next[9];
+    poly[0] = a;
+    poly[1] = b;
+    poly[2] = c;
+    int n = 3;
+    for (int edge = 0; edge < 4; ++edge) {
+        int axis = edge & 1;                  // 0: x, 1: y
+        float sign = edge < 2 ? 1.0 : -1.0;   // inside: sign * (p - bound) >= 0
+        float bound = edge < 2 ? 0.0 : 1.0;
+        int m = 0;
+        for (int i = 0; i < n; ++i) {
+            vec2 p = poly[i];
+            vec2 q = poly[i + 1 < n ? i + 1 : 0];
+            float dp = sign * (p[axis] - bound);
+            float dq = sign * (q[axis] - bound);
+            if (dp >= 0.0) next[m++] = p;
+            if ((dp >= 0.0) != (dq >= 0.0)) next[m++] = p + (q - p) * (dp / (dp - dq));
+        }
+        n = m;
+        for (int i = 0; i < n; ++i) poly[i] = next[i];
+        if (n < 3) return 0.0;
+    }
+    float area = 0.0;
+    for (int i = 0; i < n; ++i) {
+        vec2 p = poly[i];
+        vec2 q = poly[i + 1 < n ? i + 1 : 0];
+        area += p.x * q.y - p.y * q.x;
+    }
+    return 0.5 * abs(area);
+}
