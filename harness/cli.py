@@ -50,6 +50,10 @@ def _render_commands(subparsers) -> None:
     p.add_argument("--grid", type=int, metavar="G")
     p.add_argument("--caustic-map", type=int, metavar="M", dest="caustic_map")
     p.add_argument("--normalization", choices=("radiometric", "paper"))
+    p.add_argument("--preset", choices=("paper", "strong"),
+                   help="caustics-mapping preset (default: the scene's, else paper)")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="override any setting (repeatable)")
 
     p = _command(subparsers, "reference", "harness.commands.reference:reference",
                  "render the Mitsuba ground truth (cached) into a directory")
@@ -77,6 +81,11 @@ def _compare_command(subparsers) -> None:
                    help="smaller sweeps, one timing repeat, at most 4 iterations")
     p.add_argument("--max-iterations", type=int, default=8, metavar="N",
                    help="iterations 0..N in the convergence table (default 8)")
+    p.add_argument("--preset", action="append", choices=("paper", "strong"),
+                   help="a caustics-mapping preset to compare (repeatable; default: both)")
+    p.add_argument("--method", action="append", metavar="NAME",
+                   help="a registered method (entry-point group caustics_harness.methods) "
+                   "to compare (repeatable)")
     p.add_argument("--estimator", choices=("modified", "newton", "secant"))
     p.add_argument("--iterations", type=int)
     p.add_argument("--grid", type=int)

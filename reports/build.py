@@ -359,7 +359,8 @@ def build_report(out_dir: Path, comparisons: Sequence[SceneComparison], *,
         Output folder (created). EXR originals named in ``SceneComparison.files``
         are expected in ``out_dir / scene_folder(name)`` and linked relatively.
     comparisons : sequence of SceneComparison
-        One per scene, in the order of the summary table.
+        One per scene and method, in the order of the summary table (each scene's
+        methods next to each other).
     self_contained : bool
         Embed images, plots, JavaScript and CSS in each HTML file (one file per
         page, nothing else written); the EXR links stay relative.
@@ -379,7 +380,7 @@ def build_report(out_dir: Path, comparisons: Sequence[SceneComparison], *,
             atomic_write_bytes(out_dir / "_static" / name, _static(name).encode("utf-8"))
     rows, taken = [], []
     for comparison in comparisons:
-        folder = scene_folder(comparison.name, taken=taken)
+        folder = scene_folder(comparison.page, taken=taken)
         taken.append(folder)
         _build_scene(comparison, out_dir / folder, self_contained=self_contained,
                      preview_size=preview_size)

@@ -176,6 +176,9 @@ class SceneComparison:
         The caustics-mapping (time s, relMSE) that ``speedup`` was computed for;
         the report marks it on the cost plot (when None it takes the Pareto point
         nearest to ``speedup.reference_time / speedup.speedup``).
+    method, method_description : str
+        The method compared (a caustics-mapping preset, ``paper`` or ``strong``, or a
+        registered third-party method) and its one-line description.
     """
 
     name: str
@@ -196,6 +199,13 @@ class SceneComparison:
     stability: dict[str, Any] | None = None
     speedup_point: tuple[float, float] | None = None
     crosscheck: Table | None = None
+    method: str = "paper"
+    method_description: str = ""
+
+    @property
+    def page(self) -> str:
+        """The page's name: scene and method (``glass_sphere-strong``)."""
+        return f"{self.name}-{self.method}"
 
     def metric(self, view: str, region: str, metric: str) -> MetricValue:
         """Look one metric up; KeyError if it was not computed."""

@@ -15,11 +15,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.raycast import ReceiverTracer
+from renderers.caustics_mapping.caustic_trace import STATUS
 from renderers.results import RenderResult
 from scenes.geometry import SceneGeometry
 from scenes.model import DirectionalLight, Scene, WaterSurface
 
-__all__ = ["incident_flux_bound", "stability_summary"]
+__all__ = ["incident_flux_bound", "off_receiver_flux", "stability_summary"]
 
 
 def incident_flux_bound(scene: Scene, geometry: SceneGeometry) -> np.ndarray:
@@ -49,14 +51,32 @@ def incident_flux_bound(scene: Scene, geometry: SceneGeometry) -> np.ndarray:
     return total
 
 
+def off_receiver_flux(geometry: SceneGeometry, hits: dict[str, np.ndarray]) -> float:
+    """Share of the traced flux (summed over channels) splatted by vertices whose
+    exact ray (Mitsuba's ray tracing from the record's v along its r) meets no
+    receiver: splats that should not exist."""
+    status = hits["status"]
+    per_vertex = hits["flux"].sum(axis=1)
+    traced = float(per_vertex[status != STATUS["empty"]].sum())
+    splatted = status == STATUS["hit"]
+    if traced <= 0 or not splatted.any():
+        return 0.0
+    exact = ReceiverTracer(geometry)(hits["origin"][splatted], hits["direction"][splatted])
+    return float(per_vertex[splatted][~np.isfinite(exact.distance)].sum()) / traced
+
+
 def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResult,
-                      convergence=None) -> dict:
+                      convergence=None, *, hits: dict[str, np.ndarray] | None = None) -> dict:
     """What the report shows under "Numerical stability" for one render.
 
     Keys: ``finite`` (every output finite), ``lost_splats`` and ``lost_fraction``,
     ``flux_over_bound`` (receiver caustic flux / incident bound, must be <= 1),
-    and, when a convergence table is given, the safeguarded estimators' outcomes at
-    the most iterations measured (``diverged`` and ``oscillating`` must be 0).
+    the flux shares ``tir_flux_fraction`` (lost to total internal reflection at the
+    exit surface), ``unconverged_flux_fraction`` (held back by verified hits) and,
+    given the per-vertex records ``hits``, ``off_receiver_flux_fraction``
+    (:func:`off_receiver_flux`); and, when a convergence table is given, the
+    safeguarded estimators' outcomes at the most iterations measured (``diverged``
+    and ``oscillating`` must be 0).
     """
     arrays = [result.camera] + [m.irradiance for m in result.receivers]
     finite = bool(all(np.isfinite(a).all() for a in arrays))
@@ -68,6 +88,12 @@ def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResul
     ratio = float(np.max(np.where(bound > 0, flux / np.maximum(bound, 1e-300), 0.0)))
     summary = {"finite": finite, "lost_splats": lost, "lost_fraction": lost / traced,
                "flux_over_bound": ratio, "energy_ok": ratio <= 1.0 + 1e-3}
+    shares = result.metadata.get("status_flux_fraction") or {}
+    for status in ("tir", "unconverged"):
+        if status in shares:
+            summary[f"{status}_flux_fraction"] = float(shares[status])
+    if hits is not None:
+        summary["off_receiver_flux_fraction"] = off_receiver_flux(geometry, hits)
     if convergence is not None:
         rows = [dict(zip(convergence.columns, r, strict=True)) for r in convergence.rows]
         last = max(r["iteration"] for r in rows)

@@ -24,7 +24,7 @@ from renderers.caustics_mapping.caustic_trace import STATUS
 from renderers.caustics_mapping.context import GLError
 from renderers.caustics_mapping.renderer import Frame, render_frame
 from renderers.exr import write_exr
-from scenes import with_settings
+from scenes import parse_override, with_settings
 from scenes.files import atomic_write_bytes
 
 __all__ = ["render", "write_outputs"]
@@ -65,9 +65,11 @@ def write_outputs(frame: Frame, directory: str | Path) -> list[Path]:
 def render(args: argparse.Namespace) -> int:
     """``caustics render``: one frame of the method, written to ``args.output``."""
     (scene,) = load_scenes([args.scene] if args.scene else [])
-    overrides = {k: v for k, v in (
+    overrides = dict(parse_override(item) for item in args.set or [])
+    overrides |= {k: v for k, v in (
         ("estimator", args.estimator), ("iterations", args.iterations), ("grid", args.grid),
         ("caustic_map", args.caustic_map), ("normalization", args.normalization),
+        ("preset", args.preset),
     ) if v is not None}
     if args.safeguarded:
         overrides["safeguarded"] = True

@@ -84,9 +84,14 @@ def describe(args: argparse.Namespace) -> int:
         for name in effects_of(scene):
             print(f"    {name}: {EFFECTS[name]}")
         s = scene.settings
-        print(f"  settings: grid {s.grid}, caustic map {s.caustic_map}, estimator "
-              f"{s.estimator}{' (safeguarded)' if s.safeguarded else ''}, "
-              f"{s.iterations} iterations, normalization {s.normalization}")
+
+        def chosen(value):
+            return "(preset's)" if value is None else value
+
+        print(f"  settings: preset {s.preset}, grid {s.grid}, caustic map {s.caustic_map}, "
+              f"estimator {chosen(s.estimator)}, safeguarded {chosen(s.safeguarded)}, "
+              f"iterations {chosen(s.iterations)}, splat {chosen(s.splat)}, "
+              f"normalization {s.normalization}")
     return 0
 
 

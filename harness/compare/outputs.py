@@ -40,6 +40,7 @@ def comparison_json(comparison: SceneComparison) -> dict[str, Any]:
     return {
         "scene": {"name": comparison.name, "description": comparison.description,
                   "source": comparison.source, "effects": list(comparison.effects)},
+        "method": {"name": comparison.method, "description": comparison.method_description},
         "settings": comparison.settings,
         "formulas": METRIC_FORMULAS,
         "metrics": [asdict(m) for m in comparison.metrics],

@@ -1,17 +1,21 @@
 """One scene, both renderers, every comparison: ``compare_scene`` builds the
 :class:`~reports.records.SceneComparison` the outputs and the report use.
 
-Steps: the Mitsuba reference (from the cache when present) and an independent
-reference on disjoint seeds (the noise floor); the caustics-mapping render with the
-scene's settings (median frame time over repeats); metrics per view and region;
-the convergence table; the cost-versus-accuracy sweep and the equal-error speedup;
-the paper's claims; provenance.
+Steps: the method configures the scene (a caustics-mapping preset fills the unset
+settings); the Mitsuba reference (from the cache when present, shared by every
+method) and an independent reference on disjoint seeds (the noise floor); the
+method's render (median frame time over repeats after a warm-up); metrics per view
+and region; for the caustics-mapping presets, the convergence table, the
+cost-versus-accuracy sweep with the equal-error speedup, and the paper's claims;
+provenance.
 """
 
 from __future__ import annotations
 
 import os
 import platform
+import statistics
+import time
 from dataclasses import asdict, dataclass
 from typing import NamedTuple
 
@@ -25,10 +29,12 @@ from harness.studies.claims import check_five_iterations, check_one_iteration
 from harness.studies.convergence_study import convergence_study
 from harness.studies.cost_study import cost_study
 from harness.studies.runner import RealtimeRunner
+from renderers.methods import Method, load_method
 from renderers.mitsuba.reference import render_reference
 from reports.display import luminance
 from reports.records import SceneComparison
 from scenes import Scene, effects_of, with_settings
+from scenes.geometry import build_geometry
 
 __all__ = ["STUDIES", "CompareOptions", "compare_scene"]
 
@@ -162,14 +168,69 @@ def _score_views(views: list[_View]):
     return metrics, images, exposure, files
 
 
-def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -> SceneComparison:
-    """Render ``scene`` both ways and compare (see the module docstring)."""
+def _timed_method(method: Method, scene: Scene, repeats: int):
+    """(result, warm seconds): the median wall time of ``repeats`` renders after a
+    warm-up render (``time.perf_counter`` around ``method.render``)."""
+    method.render(scene)
+    times, result = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = method.render(scene)
+        times.append(time.perf_counter() - start)
+    return result, statistics.median(times)
+
+
+def _compare_other(scene: Scene, method: Method, options: CompareOptions) -> SceneComparison:
+    """A method outside caustics mapping: metrics, stability and timing only."""
+    reference, independent = _references(scene, options)
+    result, seconds = _timed_method(method, scene, options.repeats)
+    geometry = build_geometry(scene)
+    views, camera_note = _views(scene, geometry, result, reference, independent)
+    metrics, images, exposure, files = _score_views(views)
+    provenance = {
+        "scene_file": scene.source,
+        "method": {"name": method.name, "renderer": result.renderer,
+                   "timings_ms": {k: v * 1e3 for k, v in result.timings.items()},
+                   "frame_time_ms": seconds * 1e3,
+                   "timer": "time.perf_counter around render(), median after a warm-up",
+                   "metadata": result.metadata},
+        **_reference_provenance(reference, independent),
+    }
+    if camera_note:
+        provenance["camera_note"] = camera_note
+    return SceneComparison(
+        name=scene.name, description=scene.info.description, source=scene.source,
+        effects=effects_of(scene), settings=asdict(scene.settings), metrics=tuple(metrics),
+        images=images, exposure=exposure, provenance=provenance, files=files,
+        stability=stability_summary(scene, geometry, result, None),
+        method=method.name, method_description=method.description)
+
+
+def _reference_provenance(reference, independent) -> dict:
+    return {
+        "reference": {**{k: reference.metadata.get(k) for k in REFERENCE_KEYS},
+                      "timings_s": reference.timings, "timer": reference.timer},
+        "independent_reference": {k: independent.metadata.get(k)
+                                  for k in ("seed", "seeds", "relative_noise", "cache")},
+        "machine": {"platform": platform.platform(), "processor": platform.processor(),
+                    "cpus": os.cpu_count(), "python": platform.python_version()},
+    }
+
+
+def compare_scene(scene: Scene, *, method: Method | None = None,
+                  options: CompareOptions = CompareOptions()) -> SceneComparison:
+    """Render ``scene`` with ``method`` (default: the ``paper`` preset) and the
+    reference, and compare (see the module docstring)."""
+    method = method or load_method("paper")
+    scene = method.configure(scene)
+    if not method.studies:
+        return _compare_other(scene, method, options)
     reference, independent = _references(scene, options)
     with RealtimeRunner(scene, repeats=options.repeats) as runner:
         frame, frame_time = runner.timed()
-        method = frame.result
+        result = frame.result
         gl_renderer = runner.ctx.info.get("GL_RENDERER", "unknown")
-        views, camera_note = _views(scene, runner.geometry, method, reference, independent)
+        views, camera_note = _views(scene, runner.geometry, result, reference, independent)
         metrics, images, exposure, files = _score_views(views)
 
         convergence = cost = speedup = speedup_point = None
@@ -194,24 +255,22 @@ def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -
             if bar is not None:
                 bar.close()
 
-    stability = stability_summary(scene, runner.geometry, method, convergence)
+    stability = stability_summary(scene, runner.geometry, result, convergence,
+                                  hits=frame.hits)
     provenance = {
         "scene_file": scene.source,
         "caustics_mapping": {
-            "passes": method.metadata.get("passes"),
-            "timings_ms": {k: v * 1e3 for k, v in method.timings.items()},
+            "preset": result.metadata.get("preset"),
+            "passes": result.metadata.get("passes"),
+            "timings_ms": {k: v * 1e3 for k, v in result.timings.items()},
             "frame_time_ms": frame_time * 1e3,
-            "timer": method.timer,
-            "lost_splats": method.metadata.get("lost_splats"),
-            "status_counts": method.metadata.get("status_counts"),
+            "timer": result.timer,
+            "lost_splats": result.metadata.get("lost_splats"),
+            "status_counts": result.metadata.get("status_counts"),
+            "status_flux_fraction": result.metadata.get("status_flux_fraction"),
             "gl_renderer": gl_renderer,
         },
-        "reference": {**{k: reference.metadata.get(k) for k in REFERENCE_KEYS},
-                      "timings_s": reference.timings, "timer": reference.timer},
-        "independent_reference": {k: independent.metadata.get(k)
-                                  for k in ("seed", "seeds", "relative_noise", "cache")},
-        "machine": {"platform": platform.platform(), "processor": platform.processor(),
-                    "cpus": os.cpu_count(), "python": platform.python_version()},
+        **_reference_provenance(reference, independent),
     }
     if camera_note:
         provenance["camera_note"] = camera_note
@@ -220,7 +279,8 @@ def compare_scene(scene: Scene, *, options: CompareOptions = CompareOptions()) -
         effects=effects_of(scene), settings=asdict(scene.settings), metrics=tuple(metrics),
         images=images, exposure=exposure, convergence=convergence, cost=cost,
         speedup=speedup, claims=claims, provenance=provenance, files=files,
-        stability=stability, speedup_point=speedup_point)
+        stability=stability, speedup_point=speedup_point, method=method.name,
+        method_description=method.description)
 
 
 def _claims(convergence) -> dict[str, str]:

@@ -28,8 +28,10 @@ COLUMNS = ("series", "label", "estimator", "iterations", "grid", "caustic_map",
            "splat_sigma", "time_s", "relmse", "pareto")
 
 
-def sweep_configs(*, quick: bool) -> list[dict]:
-    """Settings overrides of the sweep (a smaller set when ``quick``)."""
+def sweep_configs(*, quick: bool, splat: str = "points") -> list[dict]:
+    """Settings overrides of the sweep (a smaller set when ``quick``): estimators x
+    iterations, grid, map sizes, and the splat width (``points``) or the other
+    kernels (``footprint``, ``triangles``)."""
     iterations = (0, 1, 3) if quick else (0, 1, 2, 3, 5, 8)
     grids = (32, 64, 128) if quick else (32, 64, 128, 256)
     maps = (256, 512) if quick else (256, 512, 1024)
@@ -38,7 +40,10 @@ def sweep_configs(*, quick: bool) -> list[dict]:
                for e in ("modified", "newton", "secant") for k in iterations]
     configs += [{"grid": g} for g in grids]
     configs += [{"caustic_map": m, "positions_map": m} for m in maps]
-    configs += [{"splat_sigma": s} for s in sigmas]
+    if splat == "points":
+        configs += [{"splat_sigma": s} for s in sigmas]
+    else:
+        configs += [{"splat": k} for k in ("points", "footprint", "triangles") if k != splat]
     return configs
 
 
@@ -65,21 +70,20 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
         (1/64 .. 1/4 when ``quick``).
     """
 
-    scene = runner.scene
-    s = scene.settings
+    s = runner.settings
     rows = []
     base_frame, base_time = runner.timed(clock=caustic_seconds)
     base_error = score_value("relmse", base_frame.result.receivers[0].irradiance, reference,
                              mask=caustic, exposure=None)
     rows.append(_row("caustics_mapping", "scene settings", estimator=s.estimator,
                      iterations=s.iterations, grid=s.grid, caustic_map=s.caustic_map,
-                     splat_sigma=s.splat_sigma_texels, time_s=base_time, relmse=base_error))
-    for config in sweep_configs(quick=quick):
+                     splat_sigma=s.splat_sigma, time_s=base_time, relmse=base_error))
+    for config in sweep_configs(quick=quick, splat=s.splat):
         frame, seconds = runner.timed(clock=caustic_seconds, **config)
         error = score_value("relmse", frame.result.receivers[0].irradiance, reference,
                             mask=caustic, exposure=None)
         merged = {"estimator": s.estimator, "iterations": s.iterations, "grid": s.grid,
-                  "caustic_map": s.caustic_map, "splat_sigma": s.splat_sigma_texels, **config}
+                  "caustic_map": s.caustic_map, "splat_sigma": s.splat_sigma, **config}
         rows.append(_row("caustics_mapping", _label(config), **merged, time_s=seconds,
                          relmse=error))
         if progress is not None:
@@ -88,7 +92,7 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
     ref_times, ref_errors = [], []
     for fraction in fractions:
         photons = max(1, reference_photons // fraction)
-        estimate = estimate_receivers(scene, photons=photons, seeds=1,
+        estimate = estimate_receivers(runner.scene, photons=photons, seeds=1,
                                       seed=s.seed + 10_000 + fraction, target_noise=1e-12)
         seconds = estimate.history[-1][2]
         error = score_value("relmse", estimate.caustic[0].irradiance, reference,

@@ -12,6 +12,7 @@ import statistics
 from typing import Any
 
 from renderers.caustics_mapping.context import create_context
+from renderers.caustics_mapping.presets import resolve_settings
 from renderers.caustics_mapping.renderer import render_frame
 from scenes import Scene, with_settings
 from scenes.geometry import build_geometry
@@ -47,6 +48,13 @@ class RealtimeRunner:
         self.repeats = repeats
         self.ctx = create_context()
         self._warm = False
+
+    @property
+    def settings(self):
+        """The scene's settings with the preset's choices filled in (what renders;
+        ``scene.settings`` keeps them unset, so an override of ``grid`` still moves
+        the grid-relative ones)."""
+        return resolve_settings(self.scene.settings)
 
     def __enter__(self) -> RealtimeRunner:
         return self

@@ -1,9 +1,12 @@
 """NumPy mirror of the shader's intersection estimators (``caustic_trace.glsl``).
 
 It works on the receiver positions atlas read back from the GPU and the (v, r) the
-shader used, and repeats the shader's arithmetic in float32 step by step
-(nearest-texel lookups, the same update rules, the same safeguard), so tests can
-hold the shader to the same numbers. See the shader header for the equations.
+shader used, and repeats the shader's arithmetic in float32 step by step (the same
+lookups, nearest or bilinear within one receiver, the same start, update rules and
+safeguard), so tests can hold the shader to the same numbers: bit for bit with
+nearest lookups away from texel borders, and within a stated tolerance with
+bilinear ones (the GPU's ``mix`` and the mirror's may round differently). See the
+shader header for the equations.
 """
 
 from __future__ import annotations
@@ -53,6 +56,11 @@ class MapLookup:
     def locate_with_margin(self, x: np.ndarray):
         """:meth:`locate` plus each point's distance to the nearest texel border
         (texels): below ~1e-4 the shader's rounding may pick the neighbour."""
+        face, texel, ok, margin, _ = self._project(x)
+        return face, texel, ok, margin
+
+    def _project(self, x: np.ndarray):
+        """(face, texel, inside, margin, face pixel coordinates (K, 2))."""
         x = x.astype(_F)
         if self.cube:
             d = x - self.light_position.astype(_F)
@@ -79,16 +87,36 @@ class MapLookup:
         margin = np.min(np.minimum(pixel - t, t + 1 - pixel), axis=1)
         t = np.clip(np.where(ok[:, None], t, 0), 0, self.size - 1).astype(np.int64)
         texel = np.stack([np.maximum(slot, 0) * self.size + t[:, 0], t[:, 1]], axis=1)
-        return face, texel, ok, np.where(ok, margin, np.inf)
+        return face, texel, ok, np.where(ok, margin, np.inf), (pixel, np.maximum(slot, 0))
 
-    def receiver_at(self, x: np.ndarray, margin: np.ndarray | None = None):
+    def receiver_at(self, x: np.ndarray, margin: np.ndarray | None = None, *,
+                    filtered: bool = False):
         """T(x) (K, 3) float32 and whether a receiver is there (K,); ``margin``, if
-        given, is lowered in place to each point's texel-border distance."""
-        _, texel, ok, m = self.locate_with_margin(x)
+        given, is lowered in place to each point's texel-border distance.
+
+        ``filtered``: bilinear between the four texels around x when they all show
+        the same receiver, else nearest (``bilinear_at`` in ``common.glsl``).
+        """
+        _, texel, ok, m, (pixel, slot) = self._project(x)
         if margin is not None:
             np.minimum(margin, m, out=margin)
         q = self.atlas[texel[:, 1], texel[:, 0]]
-        return q[:, :3].astype(_F), ok & (q[:, 3] > 0.5)
+        position = q[:, :3].astype(_F)
+        if filtered and self.size >= 2:
+            grid = np.clip(pixel - _F(0.5), 0, self.size - 1).astype(_F)
+            i0 = np.minimum(np.floor(grid), self.size - 2).astype(np.int64)
+            f = (grid - i0).astype(_F)
+            x0 = slot * self.size + i0[:, 0]
+            y0 = i0[:, 1]
+            corners = [self.atlas[y0 + dy, x0 + dx] for dy in (0, 1) for dx in (0, 1)]
+            tags = np.stack([c[:, 3] for c in corners])
+            same = (tags[0] > 0.5) & np.all(np.abs(tags - tags[0]) < 0.5, axis=0) & ok
+            fx, fy = f[:, :1], f[:, 1:]
+            low = corners[0][:, :3] * (1 - fx) + corners[1][:, :3] * fx
+            high = corners[2][:, :3] * (1 - fx) + corners[3][:, :3] * fx
+            blended = (low * (1 - fy) + high * fy).astype(_F)
+            position = np.where(same[:, None], blended, position)
+        return position, ok & (q[:, 3] > 0.5)
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,7 +137,8 @@ def _norm(a: np.ndarray) -> np.ndarray:
 
 def estimate_distances(
     lookup: MapLookup, origins: np.ndarray, directions: np.ndarray, *, estimator: str,
-    iterations: int, eps: float, safeguarded: bool = False,
+    iterations: int, eps: float, safeguarded: bool = False, filtered: bool = False,
+    start: str = "receiver", start_distance: float = 0.1,
 ) -> MirrorResult:
     """Run one estimator on rays (v, r), like the shader does.
 
@@ -119,9 +148,13 @@ def estimate_distances(
         v (m) and unit r, as the trace pass wrote them.
     estimator : {"modified", "newton", "secant"}
     iterations : int
-        Updates after the start estimate d_1 = g(0).
+        Updates after the start estimate d_1 = g(0) (or ``start_distance``).
     eps : float
         Newton's finite-difference step (m).
+    filtered : bool
+        Bilinear lookups within one receiver.
+    start, start_distance
+        ``"receiver"`` (d_1 = g(0)) or ``"fixed"`` (d_1 = ``start_distance``, m).
 
     Returns
     -------
@@ -137,15 +170,21 @@ def estimate_distances(
     margin = np.full(k_count, np.inf)
 
     def g_of(d):
-        t, ok = lookup.receiver_at(v + d[:, None] * r, margin)
+        t, ok = lookup.receiver_at(v + d[:, None] * r, margin, filtered=filtered)
         return _norm(t - v), t, ok
 
     hist = np.zeros((k_count, iterations + 1), _F)
-    g0, _, ok0 = g_of(np.zeros(k_count, _F))
+    if start == "fixed":
+        ok0 = np.ones(k_count, bool)
+        d = np.full(k_count, _F(start_distance))
+        have_prev = False
+    else:
+        g0, _, ok0 = g_of(np.zeros(k_count, _F))
+        d = np.where(ok0, g0, _F(0)).astype(_F)
+        have_prev = True
     status = np.where(ok0, HIT, LOST)
-    d = np.where(ok0, g0, _F(0)).astype(_F)
     d_prev = np.zeros(k_count, _F)
-    h_prev = d.copy()
+    h_prev = d.copy() if have_prev else np.zeros(k_count, _F)
     lo = np.zeros(k_count, _F)
     hi = np.full(k_count, _F(-1))
     hist[:, 0] = d
@@ -161,6 +200,8 @@ def estimate_distances(
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             if estimator == "modified":
                 prop = g
+            elif estimator == "secant" and not have_prev:
+                prop = g                    # fixed start: no previous point yet
             elif estimator == "secant":
                 den = (h - h_prev).astype(_F)
                 finite = den != 0
@@ -196,8 +237,9 @@ def estimate_distances(
         d_prev = np.where(active, d, d_prev)
         h_prev = np.where(active, h, h_prev)
         d = np.where(active, prop, d).astype(_F)
+        have_prev = True
         hist[:, k] = d
-    _, ok = lookup.receiver_at(v + d[:, None] * r, margin)
+    _, ok = lookup.receiver_at(v + d[:, None] * r, margin, filtered=filtered)
     status = np.where((status == HIT) & ~ok, LOST, status)
     hist = np.where((status == LOST)[:, None] & ~ok0[:, None], _F(0), hist)
     return MirrorResult(hist, d, status.astype(np.int32), margin)

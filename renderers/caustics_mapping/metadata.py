@@ -25,6 +25,11 @@ class MethodMetadata:
         Grid vertices per status (:data:`.caustic_trace.STATUS`).
     lost_flux, splatted_flux : list of float
         Flux (W, RGB) of the lost vertices and of the splatted (``hit``) ones.
+    status_flux_fraction : dict of str to float
+        Share of the flux of every traced vertex (all but ``empty``; summed over
+        channels) per status: e.g. ``tir`` is the flux lost to total internal
+        reflection at the exit surface, ``unconverged`` the flux verified hits held
+        back.
     light_views : str
         ``"cube"`` for a point light, else the single view's name.
     map_faces : list of str
@@ -36,8 +41,15 @@ class MethodMetadata:
     covered_texels : int or None
         Grid texels covered by caustic objects (the paper's V, Eq. 6); None unless
         ``normalization == "paper"``.
+    preset : str
+        ``paper`` or ``strong``.
     estimator, safeguarded, iterations, grid, caustic_map, positions_map, normalization
-        The settings used.
+        The settings used (after the preset filled the unset ones).
+    lookup, back_resolution, frustum, verify_hits, start, splat
+        The preset-dependent choices used.
+    splat_sigma : list of float
+        Width of the Gaussians per light sample (caustic-map texels): ``points``'
+        width, or the fallback of Gaussians without neighbours.
     newton_eps : float
         Newton's finite-difference step (m).
     channels : list of str
@@ -55,11 +67,13 @@ class MethodMetadata:
     status_counts: dict[str, int]
     lost_flux: list[float]
     splatted_flux: list[float]
+    status_flux_fraction: dict[str, float]
     light_views: str
     map_faces: list[str]
     object_views: list[str]
     light_samples: int
     covered_texels: int | None
+    preset: str
     estimator: str
     safeguarded: bool
     iterations: int
@@ -67,6 +81,13 @@ class MethodMetadata:
     caustic_map: int
     positions_map: int
     normalization: str
+    lookup: str
+    back_resolution: int
+    frustum: str
+    verify_hits: bool
+    start: str
+    splat: str
+    splat_sigma: list[float]
     newton_eps: float
     channels: list[str]
     receiver_extent: list[list[float]]

@@ -162,6 +162,10 @@ def _metadata(state: FrameState, *, merged: dict[str, np.ndarray],
     status = merged["status"]
     counts = {name: int(np.sum(status == code)) for name, code in STATUS.items()}
     lost_flux = merged["flux"][status == STATUS["lost"]].sum(axis=0)
+    per_vertex = merged["flux"].sum(axis=1)
+    traced = float(per_vertex[status != STATUS["empty"]].sum())
+    fractions = {name: float(per_vertex[status == code].sum()) / traced if traced > 0 else 0.0
+                 for name, code in STATUS.items() if name != "empty"}
     first = lights[0]
     return MethodMetadata(
         passes=acc.passes,
@@ -169,15 +173,19 @@ def _metadata(state: FrameState, *, merged: dict[str, np.ndarray],
         status_counts=counts,
         lost_flux=[float(x) for x in lost_flux],
         splatted_flux=[float(x) for x in merged["flux"][status == STATUS["hit"]].sum(axis=0)],
+        status_flux_fraction=fractions,
         light_views="cube" if first.cube else first.map_views[0].name,
         map_faces=[CUBE_FACES[f] if first.cube else first.map_views[f].name
                    for f in sorted(acc.map_faces)],
         object_views=[v.name for v in first.object_views],
         light_samples=len(lights),
         covered_texels=acc.covered_total if setup.paper else None,
-        estimator=s.estimator, safeguarded=s.safeguarded, iterations=s.iterations,
-        grid=s.grid, caustic_map=s.caustic_map, positions_map=s.positions_map,
-        normalization=s.normalization, newton_eps=setup.eps,
+        preset=s.preset, estimator=s.estimator, safeguarded=bool(s.safeguarded),
+        iterations=s.iterations, grid=s.grid, caustic_map=s.caustic_map,
+        positions_map=s.positions_map, normalization=s.normalization, lookup=s.lookup,
+        back_resolution=s.back_resolution, frustum=s.frustum,
+        verify_hits=bool(s.verify_hits), start=s.start, splat=s.splat,
+        splat_sigma=list(acc.splat_sigma), newton_eps=setup.eps,
         channels=[CHANNELS[c] if c >= 0 else "rgb" for c in setup.channels],
         receiver_extent=[list(g.extent) for g in geometry.receivers],
         gl_renderer=ctx.info["GL_RENDERER"],

@@ -63,9 +63,17 @@ def _jsonable(value):
     return value
 
 
+#: The settings the reference depends on; the method's (grid, preset, estimator, ...)
+#: do not enter its key, so every method and setting of a scene shares one reference.
+REFERENCE_SETTINGS = ("receiver_map", "photons", "spp", "seed", "seeds", "target_noise",
+                      "all_specular_paths")
+
+
 def cache_key(scene: Scene, versions: dict[str, str]) -> str:
-    """Hex SHA-256 naming the reference of ``scene`` under these versions."""
+    """Hex SHA-256 naming the reference of ``scene`` under these versions: the scene
+    (without its file path) with only :data:`REFERENCE_SETTINGS` of its settings."""
     fields = _jsonable(dataclasses.replace(scene, source=""))
+    fields["settings"] = {k: fields["settings"][k] for k in REFERENCE_SETTINGS}
     digest = hashlib.sha256()
     digest.update(json.dumps({"scene": fields, "versions": versions,
                               "format": FORMAT_VERSION}, sort_keys=True).encode())

@@ -1,0 +1,86 @@
+"""Methods: named renderers that the harness compares with the reference.
+
+A **method** turns a :class:`scenes.Scene` (its settings included) into a
+:class:`renderers.results.RenderResult` in the radiometric contract (DESIGN.md):
+a camera image in W m^-2 sr^-1 and one receiver irradiance map in W/m^2 per
+receiver, over the receiver's (u, v) extent. Methods are entry points of the group
+``caustics_harness.methods``; the caustics-mapping presets ``paper`` and ``strong``
+are registered there by this project, and a third-party package registers its own
+the same way (``[project.entry-points."caustics_harness.methods"]``), after which
+``caustics compare SCENE --method NAME`` compares it without any change here.
+
+The entry point names an object with the :class:`Method` protocol (or a callable
+without arguments that returns one).
+"""
+
+from __future__ import annotations
+
+from importlib.metadata import entry_points
+from typing import Protocol, runtime_checkable
+
+from renderers.results import RenderResult
+from scenes import Scene
+from scenes.errors import HarnessError
+
+__all__ = ["GROUP", "Method", "MethodError", "available_methods", "load_method"]
+
+#: The entry-point group methods register in.
+GROUP = "caustics_harness.methods"
+
+
+class MethodError(HarnessError, LookupError):
+    """A method name is not registered, or its entry point is not a method."""
+
+
+@runtime_checkable
+class Method(Protocol):
+    """The protocol of a method.
+
+    Attributes
+    ----------
+    name : str
+        The name it is registered under.
+    description : str
+        One line for reports.
+    studies : bool
+        Whether the caustics-mapping studies (convergence, cost) apply: only methods
+        that render with the caustics-mapping renderer's settings set it.
+    """
+
+    name: str
+    description: str
+    studies: bool
+
+    def configure(self, scene: Scene) -> Scene:
+        """The scene with this method's settings applied (recorded in the report)."""
+        ...
+
+    def render(self, scene: Scene) -> RenderResult:
+        """Render ``scene`` (as returned by :meth:`configure`)."""
+        ...
+
+
+def available_methods() -> tuple[str, ...]:
+    """Names of every registered method, sorted."""
+    return tuple(sorted({ep.name for ep in entry_points(group=GROUP)}))
+
+
+def load_method(name: str) -> Method:
+    """The method registered as ``name``.
+
+    Raises
+    ------
+    MethodError
+        No such method (the message lists the registered ones), or the entry point
+        does not give an object with the :class:`Method` protocol.
+    """
+    found = [ep for ep in entry_points(group=GROUP) if ep.name == name]
+    if not found:
+        known = ", ".join(available_methods()) or "none"
+        raise MethodError(f"unknown method {name!r} (registered in {GROUP}: {known})")
+    target = found[0].load()
+    method = target if isinstance(target, Method) else target() if callable(target) else None
+    if not isinstance(method, Method):
+        raise MethodError(f"entry point {found[0].value!r} of method {name!r} is not a "
+                          "method (needs name, description, studies, configure, render)")
+    return method
