@@ -32,7 +32,8 @@
 // cosine clamped at 0.1); otherwise the status is STATUS_UNCONVERGED and the vertex
 // is splatted only with u_splat_unconverged.
 // Safeguarded: a bracket [lo, hi] with h(lo) >= 0 >= h(hi) is kept from every
-// lookup; an update that is non-finite, leaves the bracket, or oscillates (reverses
+// lookup (an estimate whose lookup sees no receiver is taken as an upper end, and
+// the next estimate is halfway back to the last one that saw a receiver); an update that is non-finite, leaves the bracket, or oscillates (reverses
 // direction without at least halving the step, from the last two estimates) is
 // replaced by bisection of the bracket (or by the modified step while no upper end
 // is known).
@@ -213,12 +214,24 @@ int estimate(vec3 v, vec3 r, int hbase, out float d_out) {
         have_prev = true;
     }
     float lo = 0.0, hi = -1.0;   // bracket of the root of h; hi < 0: no upper end yet
+    float seen = u_start == 1 ? -1.0 : 0.0;   // last d whose lookup found a receiver
     int status = STATUS_HIT;
     history[hbase] = d;
     for (int k = 1; k <= u_iterations; ++k) {
         float g;
-        if (status == STATUS_HIT && !lookup_g(v, r, d, g, t)) status = STATUS_LOST;
+        if (status == STATUS_HIT && !lookup_g(v, r, d, g, t)) {
+            // Safeguarded: an estimate that sees no receiver has overshot the
+            // receiver's edge; step back halfway to the last one that saw one.
+            if (u_safeguarded == 1 && seen >= 0.0) {
+                hi = hi < 0.0 ? d : min(hi, d);
+                d = 0.5 * (seen + d);
+                history[hbase + k] = d;
+                continue;
+            }
+            status = STATUS_LOST;
+        }
         if (status != STATUS_HIT) { history[hbase + k] = d; continue; }
+        seen = d;
         float h = g - d;
         if (h >= 0.0) lo = max(lo, d); else hi = hi < 0.0 ? d : min(hi, d);
         float prop = d;

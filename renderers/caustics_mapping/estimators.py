@@ -188,11 +188,22 @@ def estimate_distances(
     lo = np.zeros(k_count, _F)
     hi = np.full(k_count, _F(-1))
     hist[:, 0] = d
+    seen = np.full(k_count, _F(-1) if start == "fixed" else _F(0))
     for k in range(1, iterations + 1):
         active = status == HIT
         g, t, ok = g_of(d)
-        status = np.where(active & ~ok, LOST, status)
+        missed = active & ~ok
+        if safeguarded:
+            # An estimate that sees no receiver overshot its edge: halfway back to
+            # the last one that saw one (caustic_trace.glsl).
+            back = missed & (seen >= 0)
+            hi = np.where(back, np.where(hi < 0, d, np.minimum(hi, d)), hi)
+            d = np.where(back, _F(0.5) * (seen + d), d).astype(_F)
+            missed &= ~back
+            active &= ok
+        status = np.where(missed, LOST, status)
         active &= ok
+        seen = np.where(active, d, seen)
         h = (g - d).astype(_F)
         lo = np.where(active & (h >= 0), np.maximum(lo, d), lo)
         hi = np.where(active & (h < 0), np.where(hi < 0, d, np.minimum(hi, d)), hi)

@@ -14,9 +14,8 @@
 //              quad's two triangles have opposite orientation, or a triangle wider
 //              than u_max_triangle pixels) go to a footprint Gaussian of the vertex.
 // Triangles are drawn exactly: each pixel of a triangle's bounding box gets the
-// triangle's irradiance times the area of the pixel the triangle covers (polygon
-// clipping; pixels wholly inside or outside are decided by the edge functions
-// first), so the pixels' weights sum to the triangle's area.
+// triangle's irradiance times the area of the pixel the triangle covers
+// (pixel_coverage), so the pixels' weights sum to the triangle's area.
 //
 // The record buffer (caustic_trace.glsl's layout) is read as an SSBO: record i is
 // grid vertex (view, tx, ty) with i = (view * u_grid + ty) * u_grid + tx.
@@ -149,55 +148,42 @@ float fit_radius(inout mat2 cov, float cut, float max_radius) {
 }
 #endif
 
+// Integral of clamp(x, 0, 1) dy along segment p -> q clipped to 0 <= y <= 1: exact,
+// as clamp(x) is linear between the points where x crosses 0 and 1.
+float edge_integral(vec2 p, vec2 q) {
+    float dy = q.y - p.y;
+    if (dy == 0.0) return 0.0;
+    float t0 = clamp(-p.y / dy, 0.0, 1.0), t1 = clamp((1.0 - p.y) / dy, 0.0, 1.0);
+    float ta = min(t0, t1), tb = max(t0, t1);
+    if (tb <= ta) return 0.0;
+    float dx = q.x - p.x;
+    float s0 = dx != 0.0 ? -p.x / dx : ta, s1 = dx != 0.0 ? (1.0 - p.x) / dx : ta;
+    float a = clamp(min(s0, s1), ta, tb), b = clamp(max(s0, s1), ta, tb);
+    float xa = clamp(p.x + 0.5 * (ta + a) * dx, 0.0, 1.0);
+    float xb = clamp(p.x + 0.5 * (a + b) * dx, 0.0, 1.0);
+    float xc = clamp(p.x + 0.5 * (b + tb) * dx, 0.0, 1.0);
+    return dy * ((a - ta) * xa + (b - a) * xb + (tb - b) * xc);
+}
+
 // Area of the part of triangle (a, b, c) inside the unit pixel [0, 1]^2 (all in
-// pixel units relative to that pixel's lower-left corner): Sutherland-Hodgman
-// clipping against the pixel's four edges, then the shoelace formula.
+// pixel units relative to that pixel's lower-left corner). By Green's theorem the
+// area of T within the pixel is |sum over T's edges of the integral of
+// clamp(x, 0, 1) dy over the edge's part in 0 <= y <= 1| (the strip's horizontal
+// borders have dy = 0); pixels wholly inside or outside are decided by the edge
+// functions first.
 float pixel_coverage(vec2 a, vec2 b, vec2 c) {
-    // Edge functions at the pixel's corners, signed so that inside is positive.
     float orientation = sign((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
-    vec2 edges[3] = vec2[3](a, b, c);
+    vec2 corners[3] = vec2[3](a, b, c);
     bool inside = true;
     for (int i = 0; i < 3; ++i) {
-        vec2 p = edges[i], q = edges[i < 2 ? i + 1 : 0];
+        vec2 p = corners[i], q = corners[i < 2 ? i + 1 : 0];
         vec2 e = orientation * vec2(p.y - q.y, q.x - p.x);   // inward normal
-        float at0 = dot(e, -p);                             // corner (0, 0)
+        float at0 = dot(e, -p);                             // at the corner (0, 0)
         float lowest = at0 + min(e.x, 0.0) + min(e.y, 0.0);
         float highest = at0 + max(e.x, 0.0) + max(e.y, 0.0);
         if (highest <= 0.0) return 0.0;                     // wholly outside this edge
         inside = inside && lowest >= 0.0;
     }
     if (inside) return 1.0;
-    vec2 lo = min(min(a, b), c), hi = max(max(a, b), c);
-    if (all(greaterThanEqual(lo, vec2(0.0))) && all(lessThanEqual(hi, vec2(1.0))))
-        return 0.5 * abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
-    vec2 poly[9];
-    vec2 next[9];
-    poly[0] = a;
-    poly[1] = b;
-    poly[2] = c;
-    int n = 3;
-    for (int edge = 0; edge < 4; ++edge) {
-        int axis = edge & 1;                  // 0: x, 1: y
-        float sign = edge < 2 ? 1.0 : -1.0;   // inside: sign * (p - bound) >= 0
-        float bound = edge < 2 ? 0.0 : 1.0;
-        int m = 0;
-        for (int i = 0; i < n; ++i) {
-            vec2 p = poly[i];
-            vec2 q = poly[i + 1 < n ? i + 1 : 0];
-            float dp = sign * (p[axis] - bound);
-            float dq = sign * (q[axis] - bound);
-            if (dp >= 0.0) next[m++] = p;
-            if ((dp >= 0.0) != (dq >= 0.0)) next[m++] = p + (q - p) * (dp / (dp - dq));
-        }
-        n = m;
-        for (int i = 0; i < n; ++i) poly[i] = next[i];
-        if (n < 3) return 0.0;
-    }
-    float area = 0.0;
-    for (int i = 0; i < n; ++i) {
-        vec2 p = poly[i];
-        vec2 q = poly[i + 1 < n ? i + 1 : 0];
-        area += p.x * q.y - p.y * q.x;
-    }
-    return 0.5 * abs(area);
+    return abs(edge_integral(a, b) + edge_integral(b, c) + edge_integral(c, a));
 }

@@ -9,9 +9,11 @@ from tests.conftest import SCENES
 
 
 def test_defaults(minimal_scene_text):
+    """The paper preset by default; the choices it makes are left unset (None) in the
+    scene, so that a preset chosen later fills them."""
     s = parse_scene(minimal_scene_text).settings
-    assert (s.grid, s.estimator, s.iterations, s.normalization) == (128, "modified", 3,
-                                                                    "radiometric")
+    assert (s.preset, s.grid, s.normalization) == ("paper", 128, "radiometric")
+    assert (s.estimator, s.iterations, s.safeguarded, s.splat) == (None, None, None, None)
 
 
 def test_per_scene_settings():
