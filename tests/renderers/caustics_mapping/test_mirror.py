@@ -63,3 +63,39 @@ def test_shader_matches_mirror(ctx, name, estimator, safeguarded):
     assert close.mean() >= fraction, (
         f"only {close.mean():.2%} of vertices agree within {rtol:g}")
     assert np.mean(mirror.status[keep] == status[traced][keep]) >= STATUS_AGREEMENT
+
+
+#: Filtered lookups (strong preset): the GPU's bilinear `mix` and NumPy's may round
+#: differently, so the mirror holds the shader within a stated tolerance, not bit for
+#: bit: 1e-4 relative for 98 % of the vertices. Measured on glass_sphere at these
+#: settings (1,804 vertices): modified, both starts, all within 4.4e-7; secant 99.6 %
+#: (receiver start) and 99.7 % (fixed) within 1e-6, all within 6.5e-5; final status
+#: identical for all.
+FILTERED_TOLERANCE = (1e-4, 0.98)
+
+
+@pytest.mark.parametrize("start", ["receiver", "fixed"])
+@pytest.mark.parametrize("estimator", ["modified", "secant"])
+def test_filtered_lookups_and_start_match_the_mirror(ctx, estimator, start):
+    """Strong preset's lookups (bilinear within one receiver), both starts, the
+    safeguarded estimators: per-iteration estimates of shader and mirror agree."""
+    path = next(p for p in SCENES if p.stem == "glass_sphere")
+    scene = small_scene(path, preset="strong", estimator=estimator, iterations=4,
+                        start=start, verify_hits=False)
+    frame = render_frame(scene, ctx=ctx)
+    hits = frame.hits
+    traced = np.isin(hits["status"], [STATUS["hit"], STATUS["lost"], STATUS["diverged"]])
+    assert traced.sum() > 500
+    mirror = estimate_distances(
+        frame.lookups[0], hits["origin"][traced], hits["direction"][traced],
+        estimator=estimator, iterations=4, eps=frame.eps, safeguarded=True, filtered=True,
+        start=start, start_distance=scene.settings.start_distance)
+    shader = hits["history"][traced]
+    scale = np.maximum(np.abs(shader), np.abs(mirror.history)).max(axis=1) + 1e-30
+    rtol, fraction = FILTERED_TOLERANCE
+    close = np.all(np.abs(shader - mirror.history) <= rtol * scale[:, None], axis=1)
+    worst = np.max(np.abs(shader - mirror.history) / scale[:, None])
+    assert close.mean() >= fraction, (
+        f"only {close.mean():.2%} of vertices agree within {rtol:g} (worst {worst:.2g})")
+    if start == "fixed":
+        np.testing.assert_array_equal(shader[:, 0], np.float32(scene.settings.start_distance))
