@@ -9,8 +9,8 @@ are registered there by this project, and a third-party package registers its ow
 the same way (``[project.entry-points."caustics_harness.methods"]``), after which
 ``caustics compare SCENE --method NAME`` compares it without any change here.
 
-The entry point names an object with the :class:`Method` protocol (or a callable
-without arguments that returns one).
+The entry point names an object with the :class:`Method` protocol, or a class or
+other callable without arguments that returns one.
 """
 
 from __future__ import annotations
@@ -79,7 +79,9 @@ def load_method(name: str) -> Method:
         known = ", ".join(available_methods()) or "none"
         raise MethodError(f"unknown method {name!r} (registered in {GROUP}: {known})")
     target = found[0].load()
-    method = target if isinstance(target, Method) else target() if callable(target) else None
+    if isinstance(target, type) or (callable(target) and not isinstance(target, Method)):
+        target = target()                   # a class or factory: call it for the method
+    method = target
     if not isinstance(method, Method):
         raise MethodError(f"entry point {found[0].value!r} of method {name!r} is not a "
                           "method (needs name, description, studies, configure, render)")

@@ -29,7 +29,7 @@ def test_bench_report_one_scene(benchmark, tmp_path, full_size, self_contained):
     index = benchmark.pedantic(build_report, args=(tmp_path, [full_size]),
                                kwargs={"self_contained": self_contained}, rounds=3,
                                warmup_rounds=1)
-    page = index.parent / "glass_sphere" / "index.html"
+    page = index.parent / "glass_sphere-paper" / "index.html"
     sizes = sum(p.stat().st_size for p in index.parent.rglob("*") if p.is_file())
     benchmark.extra_info.update(page_bytes=page.stat().st_size, total_bytes=sizes)
     print(f"\n{'self-contained' if self_contained else 'linked'}: page {page.stat().st_size} "

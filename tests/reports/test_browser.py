@@ -145,7 +145,7 @@ def test_scene_page_in_chromium(browser, reports, comparison, mode):
     decodes; the exposure slider brightens the HDR canvases; the A/B slider and the
     pointer swap method and reference; a screenshot is saved."""
     start = time.perf_counter()
-    page, log = _open(browser, reports[mode] / "glass_sphere" / "index.html")
+    page, log = _open(browser, reports[mode] / "glass_sphere-paper" / "index.html")
     _wait_ready(page)
     count = _assert_images_decode(page)
     assert count >= 8  # 3 maps + 3 colour bars per view, regions, 2 plots

@@ -105,7 +105,7 @@ def test_hostile_text_is_escaped_and_folder_is_sanitised(linked, embedded):
 
 
 def test_metric_table_shows_value_noise_floor_and_formula(linked, comparison):
-    html = (linked / "glass_sphere" / "index.html").read_text("utf-8")
+    html = (linked / "glass_sphere-paper" / "index.html").read_text("utf-8")
     m = comparison.metric("receiver0", "caustic", "ssim")
     row = re.search(r"<tr><td>caustic</td><td>ssim</td>(.*?)</tr>",
                     html[html.index("<caption>receiver0</caption>"):], re.S).group(1)
@@ -121,12 +121,12 @@ def test_thresholds_pass_fail_and_none(linked, embedded):
     index = (linked / "index.html").read_text("utf-8")
     assert "1/2 passed" in index and "(1 failed)" in index
     assert "no thresholds checked" in index
-    scene = (linked / "glass_sphere" / "index.html").read_text("utf-8")
+    scene = (linked / "glass_sphere-paper" / "index.html").read_text("utf-8")
     assert scene.count('<tr class="fail">') == 1 and "FAIL" in scene
 
 
 def test_provenance_settings_and_claims_are_shown(linked, comparison):
-    html = (linked / "glass_sphere" / "index.html").read_text("utf-8")
+    html = (linked / "glass_sphere-paper" / "index.html").read_text("utf-8")
     for text in ("caustic_map", "L T T D", "3.9.0", "reference_cache_hit",
                  "scenes/glass_sphere.toml", "refraction.double",
                  "one iteration is enough for rendering", "lost_splats"):
@@ -140,13 +140,13 @@ def test_exr_links_are_relative_and_flag_missing_files(tmp_path, comparison):
     c = replace(comparison, files={"camera/method": "camera_method.exr",
                                    "camera/reference": "../../escape.exr"})
     (tmp_path / "glass_sphere").mkdir()
-    (tmp_path / "glass_sphere" / "camera_method.exr").write_bytes(b"x")
+    (tmp_path / "glass_sphere-paper" / "camera_method.exr").write_bytes(b"x")
     build_report(tmp_path, [c])
-    html = (tmp_path / "glass_sphere" / "index.html").read_text("utf-8")
+    html = (tmp_path / "glass_sphere-paper" / "index.html").read_text("utf-8")
     assert '<a href="camera_method.exr">camera_method.exr</a></li>' in html
     assert 'href="../../escape.exr"' not in html and "not linked" in html
     build_report(tmp_path, [replace(c, files={"camera/method": "gone.exr"})])
-    assert "not found beside this page" in (tmp_path / "glass_sphere" / "index.html").read_text()
+    assert "not found beside this page" in (tmp_path / "glass_sphere-paper" / "index.html").read_text()
 
 
 def test_hdr_previews_decode_to_the_images_receivers_flipped(linked, comparison):
@@ -166,18 +166,18 @@ def test_hdr_previews_decode_to_the_images_receivers_flipped(linked, comparison)
 def test_large_images_are_downsampled_and_the_page_says_so(tmp_path, comparison_factory):
     c = comparison_factory(camera=(300, 400), receiver=(32, 32))
     build_report(tmp_path, [c], preview_size=128)
-    html = (tmp_path / "glass_sphere" / "index.html").read_text("utf-8")
+    html = (tmp_path / "glass_sphere-paper" / "index.html").read_text("utf-8")
     assert "box-filtered down 4×" in html
     camera = decode_uri(hdr_uris(tmp_path / "glass_sphere")["camera"]["method"])
     assert camera.shape == (75, 100, 3)
 
 
 def test_plots_are_valid_svg_with_the_pareto_front(linked):
-    cost = ET.parse(linked / "glass_sphere" / "cost_accuracy.svg").getroot()
+    cost = ET.parse(linked / "glass_sphere-paper" / "cost_accuracy.svg").getroot()
     assert cost.tag.endswith("svg")
-    text = (linked / "glass_sphere" / "cost_accuracy.svg").read_text("utf-8")
+    text = (linked / "glass_sphere-paper" / "cost_accuracy.svg").read_text("utf-8")
     assert "Pareto front" in text and "equal-error speedup" in text
-    conv = (linked / "glass_sphere" / "convergence.svg").read_text("utf-8")
+    conv = (linked / "glass_sphere-paper" / "convergence.svg").read_text("utf-8")
     for label in ("modified", "newton (safeguarded)", "secant"):
         assert label in conv
 
@@ -189,7 +189,7 @@ def test_optional_parts_may_be_missing(tmp_path, comparison):
                 claims={}, provenance={}, files={}, thresholds=(), stability=None,
                 images={k: v for k, v in comparison.images.items() if k.startswith("camera/")})
     build_report(tmp_path, [c])
-    html = (tmp_path / "glass_sphere" / "index.html").read_text("utf-8")
+    html = (tmp_path / "glass_sphere-paper" / "index.html").read_text("utf-8")
     assert html.count("<p>Not run.</p>") == 3 and "No thresholds checked." in html
     assert "No originals written." in html and "receiver0_signed" not in html
 
@@ -203,11 +203,11 @@ def test_bad_image_key_is_refused(tmp_path, comparison):
 def test_rebuild_overwrites_in_place(tmp_path, comparison):
     """Building twice gives the same page (deterministic output, atomic rewrites)."""
     build_report(tmp_path, [comparison])
-    first = (tmp_path / "glass_sphere" / "index.html").read_bytes()
-    svg = (tmp_path / "glass_sphere" / "cost_accuracy.svg").read_bytes()
+    first = (tmp_path / "glass_sphere-paper" / "index.html").read_bytes()
+    svg = (tmp_path / "glass_sphere-paper" / "cost_accuracy.svg").read_bytes()
     build_report(tmp_path, [comparison])
-    assert (tmp_path / "glass_sphere" / "index.html").read_bytes() == first
-    assert (tmp_path / "glass_sphere" / "cost_accuracy.svg").read_bytes() == svg
+    assert (tmp_path / "glass_sphere-paper" / "index.html").read_bytes() == first
+    assert (tmp_path / "glass_sphere-paper" / "cost_accuracy.svg").read_bytes() == svg
     assert not list(tmp_path.rglob("*.tmp"))
 
 
@@ -228,5 +228,5 @@ def test_crosscheck_section_shows_the_result_when_one_was_run(tmp_path, comparis
     section = section[:section.index("</section>")]
     assert "luxcore LIGHTCPU" in section and "block (3, 4)" in section
     assert "0.0703" in section and "4.73" in section and "4.84" in section
-    plain = unescape((tmp_path / "glass_sphere" / "index.html").read_text("utf-8"))
+    plain = unescape((tmp_path / "glass_sphere-paper" / "index.html").read_text("utf-8"))
     assert "Not run (caustics compare --crosscheck luxcore" in re.sub(r"<[^>]+>", "", plain)

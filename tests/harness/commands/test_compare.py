@@ -33,7 +33,15 @@ def test_compare_writes_everything_and_reuses_the_cache(tmp_path, capsys):
     assert main(argv) == 0
     summary = capsys.readouterr().out
     assert "glass_sphere" in summary and "equal-error speedup" in summary
-    folder = out / "glass_sphere"
+    assert "paper" in summary and "strong" in summary
+    strong = json.loads((out / "glass_sphere-strong" / "metrics.json").read_text())
+    assert strong["method"]["name"] == "strong"
+    assert strong["provenance"]["caustics_mapping"]["preset"] == "strong"
+    assert strong["settings"]["splat"] == "triangles"
+    assert strong["provenance"]["reference"]["cache"] == "hit"    # shared with paper
+    index = (out / "index.html").read_text()
+    assert index.index("glass_sphere-paper/") < index.index("glass_sphere-strong/")
+    folder = out / "glass_sphere-paper"
     assert (out / "index.html").is_file() and (folder / "index.html").is_file()
     data = json.loads((folder / "metrics.json").read_text())
     relmse = [m for m in data["metrics"] if (m["view"], m["region"], m["metric"])
@@ -60,7 +68,7 @@ def test_compare_writes_everything_and_reuses_the_cache(tmp_path, capsys):
         cost = list(csv.DictReader(f))
     assert {r["series"] for r in cost} == {"caustics_mapping", "reference"}
     assert any(r["pareto"] == "True" for r in cost)
-    assert main(argv[:-len(SMALL)] + SMALL + ["--studies", "metrics"]) == 0
+    assert main(argv[:-len(SMALL)] + SMALL + ["--studies", "metrics", "--preset", "paper"]) == 0
     again = json.loads((folder / "metrics.json").read_text())
     assert again["provenance"]["reference"]["cache"] == "hit"
     assert again["provenance"]["independent_reference"]["cache"] == "hit"
@@ -80,18 +88,18 @@ def test_compare_checks_bounds_like_the_test_suite(tmp_path, capsys, monkeypatch
     monkeypatch.chdir(REPO)
     out, cache = tmp_path / "out", tmp_path / "cache"
     fast = ["--studies", "metrics", "--cache-dir", str(cache), "-q", "--set",
-            "photons=50000", "--set", "seeds=2", "--set", "spp=1"]
+            "photons=50000", "--set", "seeds=2", "--set", "spp=1", "--preset", "paper"]
     scene = str(SCENES / "glass_sphere.toml")
     assert main(["compare", scene, "-o", str(out), *fast]) == 0
-    data = json.loads((out / "glass_sphere" / "metrics.json").read_text())
+    data = json.loads((out / "glass_sphere-paper" / "metrics.json").read_text())
     assert len(data["thresholds"]) == 4 and all(t["passed"] for t in data["thresholds"])
     assert main(["compare", scene, "-o", str(out), *fast, "--iterations", "0",
                  "--fail-on-thresholds"]) == 3
-    data = json.loads((out / "glass_sphere" / "metrics.json").read_text())
+    data = json.loads((out / "glass_sphere-paper" / "metrics.json").read_text())
     assert not all(t["passed"] for t in data["thresholds"])
     copy = _small_scene(tmp_path)
     assert main(["compare", str(copy), "-o", str(tmp_path / "copy"), *fast]) == 0
-    data = json.loads((tmp_path / "copy" / "glass_sphere" / "metrics.json").read_text())
+    data = json.loads((tmp_path / "copy" / "glass_sphere-paper" / "metrics.json").read_text())
     assert data["thresholds"] == []
 
 
@@ -102,14 +110,14 @@ def test_compare_by_bundled_name_from_any_directory(tmp_path, monkeypatch, capsy
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "out"
     argv = ["compare", "glass_sphere", "-o", str(out), "--studies", "metrics",
-            "--cache-dir", str(tmp_path / "cache"), "-q", *SMALL]
+            "--cache-dir", str(tmp_path / "cache"), "-q", "--preset", "paper", *SMALL]
     assert main(argv) == 0
-    data = json.loads((out / "glass_sphere" / "metrics.json").read_text())
+    data = json.loads((out / "glass_sphere-paper" / "metrics.json").read_text())
     assert data["scene"]["source"].endswith("scenes/glass_sphere.toml")
     assert data["thresholds"], "the bundled bounds were not checked"
     assert {t["view"] for t in data["thresholds"]} == {"receiver0"}
     assert data["files"]["receiver0/method"] == "receiver0_method.exr"
-    assert (out / "glass_sphere" / "receiver0_method.exr").is_file()
+    assert (out / "glass_sphere-paper" / "receiver0_method.exr").is_file()
 
 
 def test_missing_thresholds_file_is_an_error(tmp_path, capsys):
