@@ -222,8 +222,12 @@ int estimate(vec3 v, vec3 r, int hbase, out float d_out) {
         if (status == STATUS_HIT && !lookup_g(v, r, d, g, t)) {
             // Safeguarded: an estimate that sees no receiver has overshot the
             // receiver's edge; step back halfway to the last one that saw one.
+            // The missed point becomes the previous one, so that a jump forward
+            // again is caught as oscillation (secant restarts: h there is unknown).
             if (u_safeguarded == 1 && seen >= 0.0) {
                 hi = hi < 0.0 ? d : min(hi, d);
+                d_prev = d;
+                have_prev = false;
                 d = 0.5 * (seen + d);
                 history[hbase + k] = d;
                 continue;

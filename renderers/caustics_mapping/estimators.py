@@ -177,14 +177,14 @@ def estimate_distances(
     if start == "fixed":
         ok0 = np.ones(k_count, bool)
         d = np.full(k_count, _F(start_distance))
-        have_prev = False
+        have_prev = np.zeros(k_count, bool)
     else:
         g0, _, ok0 = g_of(np.zeros(k_count, _F))
         d = np.where(ok0, g0, _F(0)).astype(_F)
-        have_prev = True
+        have_prev = np.ones(k_count, bool)
     status = np.where(ok0, HIT, LOST)
     d_prev = np.zeros(k_count, _F)
-    h_prev = d.copy() if have_prev else np.zeros(k_count, _F)
+    h_prev = np.where(have_prev, d, _F(0)).astype(_F)
     lo = np.zeros(k_count, _F)
     hi = np.full(k_count, _F(-1))
     hist[:, 0] = d
@@ -198,6 +198,8 @@ def estimate_distances(
             # the last one that saw one (caustic_trace.glsl).
             back = missed & (seen >= 0)
             hi = np.where(back, np.where(hi < 0, d, np.minimum(hi, d)), hi)
+            d_prev = np.where(back, d, d_prev)
+            have_prev &= ~back
             d = np.where(back, _F(0.5) * (seen + d), d).astype(_F)
             missed &= ~back
             active &= ok
@@ -211,12 +213,13 @@ def estimate_distances(
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             if estimator == "modified":
                 prop = g
-            elif estimator == "secant" and not have_prev:
-                prop = g                    # fixed start: no previous point yet
             elif estimator == "secant":
+                # Without a previous point (fixed start, or a restart after stepping
+                # back) the modified step g.
                 den = (h - h_prev).astype(_F)
-                finite = den != 0
-                prop = np.where(finite, d - h * (d - d_prev) / np.where(finite, den, 1), d)
+                finite = (den != 0) | ~have_prev
+                secant = d - h * (d - d_prev) / np.where(den != 0, den, 1)
+                prop = np.where(have_prev, np.where(den != 0, secant, d), g)
             elif estimator == "newton":
                 f = _norm(t - (v + d[:, None] * r))
                 de = (d + eps).astype(_F)
@@ -248,7 +251,7 @@ def estimate_distances(
         d_prev = np.where(active, d, d_prev)
         h_prev = np.where(active, h, h_prev)
         d = np.where(active, prop, d).astype(_F)
-        have_prev = True
+        have_prev |= active
         hist[:, k] = d
     _, ok = lookup.receiver_at(v + d[:, None] * r, margin, filtered=filtered)
     status = np.where((status == HIT) & ~ok, LOST, status)

@@ -146,7 +146,8 @@ def test_exr_links_are_relative_and_flag_missing_files(tmp_path, comparison):
     assert '<a href="camera_method.exr">camera_method.exr</a></li>' in html
     assert 'href="../../escape.exr"' not in html and "not linked" in html
     build_report(tmp_path, [replace(c, files={"camera/method": "gone.exr"})])
-    assert "not found beside this page" in (tmp_path / "glass_sphere-paper" / "index.html").read_text()
+    page = tmp_path / "glass_sphere-paper" / "index.html"
+    assert "not found beside this page" in page.read_text()
 
 
 def test_hdr_previews_decode_to_the_images_receivers_flipped(linked, comparison):

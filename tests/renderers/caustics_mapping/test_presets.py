@@ -18,7 +18,7 @@ from harness.checks.stability import off_receiver_flux
 from renderers.caustics_mapping import render_frame
 from renderers.caustics_mapping.caustic_trace import STATUS
 from renderers.caustics_mapping.presets import PRESETS, resolve_settings
-from scenes import load_scene, with_settings
+from scenes import load_scene, parse_scene, with_settings
 from scenes.geometry import build_geometry
 from tests.conftest import SCENES
 
@@ -38,8 +38,6 @@ def _scene(name: str, **settings):
 
 def test_explicit_settings_win_over_the_preset(minimal_scene_text):
     """Regression lock of the resolution rule: a preset fills only unset choices."""
-    from scenes import parse_scene
-
     settings = parse_scene(minimal_scene_text).settings
     strong = resolve_settings(with_settings(parse_scene(minimal_scene_text),
                                             {"preset": "strong", "splat": "points"}).settings)
