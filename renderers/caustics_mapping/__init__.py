@@ -2,8 +2,11 @@
 
 Passes, one module each with its GLSL beside it: :mod:`.receiver_positions`,
 :mod:`.object_positions`, :mod:`.caustic_trace`, :mod:`.caustic_splat`,
-:mod:`.receiver_splat`, :mod:`.lowpass`, :mod:`.shadow_map`, :mod:`.camera`.
-:mod:`.estimators` is the NumPy mirror of the intersection estimators.
+:mod:`.receiver_splat` (both splat passes share ``splat_kernels.glsl``: points,
+footprint and triangle kernels), :mod:`.lowpass`, :mod:`.shadow_map`, :mod:`.camera`.
+:mod:`.estimators` is the NumPy mirror of the intersection estimators;
+:mod:`.presets` the ``paper`` and ``strong`` presets and :mod:`.methods` the same as
+registered methods (:mod:`renderers.methods`).
 """
 
 from renderers.caustics_mapping.context import GLError, create_context
