@@ -209,15 +209,23 @@ def _rotate_about_view_axis(view: np.ndarray, angle: float) -> np.ndarray:
     return rot @ view
 
 
-def _tight_perspective(eye: np.ndarray, points: np.ndarray, name: str):
-    """A rectangular, asymmetric frustum fitted to the points' projection, or None
-    when the light is too close (the cube is used then)."""
+def _sphere_seen_from(eye: np.ndarray, points: np.ndarray):
+    """(centre, radius, distance from ``eye``) of the points' bounding sphere (about
+    their box's centre), or None when ``eye`` is inside or within 5 % of it."""
     lo, hi = points.min(axis=0), points.max(axis=0)
     center = (lo + hi) / 2
     radius = float(np.linalg.norm(points - center, axis=1).max())
     dist = float(np.linalg.norm(center - eye))
-    if dist <= radius * 1.05:
+    return None if dist <= radius * 1.05 else (center, radius, dist)
+
+
+def _tight_perspective(eye: np.ndarray, points: np.ndarray, name: str):
+    """A rectangular, asymmetric frustum fitted to the points' projection, or None
+    when the light is too close (the cube is used then)."""
+    sphere = _sphere_seen_from(eye, points)
+    if sphere is None:
         return None
+    center, _, dist = sphere
     base = look_at(eye, center - eye, _up_for(center - eye))
     local = points @ base[:3, :3].T + base[:3, 3]
     depth = -local[:, 2]
@@ -276,12 +284,10 @@ def _cube(eye: np.ndarray, points: np.ndarray) -> tuple[LightView, ...]:
 
 def _fitted_perspective(eye: np.ndarray, points: np.ndarray, name: str):
     """A frustum around the points' bounding sphere, or None if it would be too wide."""
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    center = (lo + hi) / 2
-    radius = float(np.linalg.norm(points - center, axis=1).max())
-    dist = float(np.linalg.norm(center - eye))
-    if dist <= radius * 1.05:
+    sphere = _sphere_seen_from(eye, points)
+    if sphere is None:
         return None
+    center, radius, dist = sphere
     half = math.asin(radius / dist)
     if half > _MAX_FITTED_HALF_ANGLE:
         return None

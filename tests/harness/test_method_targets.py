@@ -47,6 +47,14 @@ def _maps(name: str, cache):
     return reference.receivers[0], {p: r.receivers[0] for p, r in methods.items()}
 
 
+def caustic_errors(reference, maps) -> dict[str, float]:
+    """Receiver relMSE of each preset over the reference's caustic region."""
+    ref = reference.irradiance
+    region = caustic_region(ref)
+    return {p: score_value("relmse", m.irradiance, ref, mask=region, exposure=None)
+            for p, m in maps.items()}
+
+
 def focus_measures(reference: np.ndarray, method: np.ndarray, extent, *, radius: float):
     """(reference peak, method peak, reference share, method share): the peaks are
     the largest 3 x 3 box means of the luminance (W/m^2; the box tames the photon
@@ -70,9 +78,7 @@ def test_glass_sphere_focus_flux_and_error(cache):
     within 0.03 of the reference's (paper 0.17 vs 0.35), flux ratio within 1 %."""
     reference, maps = _maps("glass_sphere", cache)
     ref = reference.irradiance
-    region = caustic_region(ref)
-    errors = {p: score_value("relmse", m.irradiance, ref, mask=region, exposure=None)
-              for p, m in maps.items()}
+    errors = caustic_errors(reference, maps)
     assert errors["strong"] <= 0.012 < errors["paper"]
     ref_peak, peak, ref_share, share = focus_measures(ref, maps["strong"].irradiance,
                                                       reference.extent, radius=0.05)
@@ -99,8 +105,5 @@ def test_dispersion_sphere_flux_per_channel(cache):
 def test_bunny_caustic_error(cache):
     """Method target: caustic relMSE <= 0.25 (paper 0.48)."""
     reference, maps = _maps("bunny", cache)
-    ref = reference.irradiance
-    region = caustic_region(ref)
-    errors = {p: score_value("relmse", m.irradiance, ref, mask=region, exposure=None)
-              for p, m in maps.items()}
+    errors = caustic_errors(reference, maps)
     assert errors["strong"] <= 0.25 < errors["paper"]
