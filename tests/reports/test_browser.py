@@ -194,7 +194,7 @@ def test_canvas_tone_map_matches_the_metrics_tone_map(browser, reports, comparis
     ``reports.display`` on the shipped data (within one level), for the
     camera image and the (flipped) receiver map: no colour management, no alpha
     premultiplication, no drift between the two implementations."""
-    root = reports["linked"] / "glass_sphere"
+    root = reports["linked"] / "glass_sphere-paper"
     page, log = _open(browser, root / "index.html")
     _wait_ready(page)
     uris = hdr_uris(root)
@@ -219,7 +219,7 @@ def test_summary_page_in_chromium(browser, reports, mode):
     page.screenshot(path=str(ARTIFACTS / f"report-index-{mode}.png"), full_page=True)
     page.locator("a.scene-link").first.click()
     page.wait_for_load_state("load")
-    assert page.url.endswith("/glass_sphere/index.html")
+    assert page.url.endswith("/glass_sphere-paper/index.html")
     _wait_ready(page)
     log.assert_clean()
     page.close()
@@ -230,7 +230,7 @@ def test_hostile_scene_text_is_inert(browser, reports, mode):
     """A name and description full of tags and scripts show as text: no script runs
     (``window.__pwned`` stays undefined), no element is injected, and the visible
     text is the original string."""
-    folder = reports[mode] / scene_folder(HOSTILE_NAME)
+    folder = reports[mode] / scene_folder(f"{HOSTILE_NAME}-paper")
     for path in (folder / "index.html", reports[mode] / "index.html"):
         page, log = _open(browser, path)
         if path.parent == folder:

@@ -59,12 +59,13 @@ def test_layout_of_a_linked_report(linked, comparison):
     previews, plots and HDR data; nothing written outside ``out_dir``."""
     assert (linked / "index.html").is_file()
     assert {p.name for p in (linked / "_static").iterdir()} == {"report.css", "report.js"}
-    scene = linked / "glass_sphere"
+    scene = linked / "glass_sphere-paper"
     for name in ("index.html", "hdr.js", "convergence.svg", "cost_accuracy.svg",
                  "camera_signed.png", "receiver0_flip.png", "thumbnail_method.png"):
         assert (scene / name).is_file(), name
     folders = sorted(p.name for p in linked.iterdir() if p.is_dir())
-    assert folders == sorted(["_static", "glass_sphere", scene_folder(HOSTILE_NAME)])
+    hostile = scene_folder(f"{HOSTILE_NAME}-paper")
+    assert folders == sorted(["_static", "glass_sphere-paper", hostile])
 
 
 def test_self_contained_report_is_one_file_per_page(embedded):
@@ -72,8 +73,8 @@ def test_self_contained_report_is_one_file_per_page(embedded):
     the scene pages, the index and the EXR originals."""
     files = sorted(p.relative_to(embedded).as_posix() for p in embedded.rglob("*")
                    if p.is_file())
-    assert files == sorted(["index.html", "glass_sphere/index.html",
-                            f"{scene_folder(HOSTILE_NAME)}/index.html"])
+    assert files == sorted(["index.html", "glass_sphere-paper/index.html",
+                            f"{scene_folder(f'{HOSTILE_NAME}-paper')}/index.html"])
     for page in files:
         html = (embedded / page).read_text("utf-8")
         refs = re.findall(r'(?:src|href)="([^"]*)"', html)
@@ -94,7 +95,7 @@ def test_no_page_points_at_the_network(linked, embedded):
 
 def test_hostile_text_is_escaped_and_folder_is_sanitised(linked, embedded):
     """Name and description appear only HTML-escaped; no raw tag survives."""
-    folder = scene_folder(HOSTILE_NAME)
+    folder = scene_folder(f"{HOSTILE_NAME}-paper")
     assert "/" not in folder and "<" not in folder
     for root in (linked, embedded):
         for page in (root / "index.html", root / folder / "index.html"):
@@ -139,7 +140,7 @@ def test_exr_links_are_relative_and_flag_missing_files(tmp_path, comparison):
     leaves the scene folder is not linked."""
     c = replace(comparison, files={"camera/method": "camera_method.exr",
                                    "camera/reference": "../../escape.exr"})
-    (tmp_path / "glass_sphere").mkdir()
+    (tmp_path / "glass_sphere-paper").mkdir()
     (tmp_path / "glass_sphere-paper" / "camera_method.exr").write_bytes(b"x")
     build_report(tmp_path, [c])
     html = (tmp_path / "glass_sphere-paper" / "index.html").read_text("utf-8")
@@ -153,7 +154,7 @@ def test_exr_links_are_relative_and_flag_missing_files(tmp_path, comparison):
 def test_hdr_previews_decode_to_the_images_receivers_flipped(linked, comparison):
     """The shipped HDR data is the comparison's image (receiver maps upside down so
     +v points up), within RGBE precision."""
-    uris = hdr_uris(linked / "glass_sphere")
+    uris = hdr_uris(linked / "glass_sphere-paper")
     assert set(uris) == {"camera", "receiver0"}
     for view, flip in (("camera", False), ("receiver0", True)):
         for layer in ("method", "reference"):
@@ -169,7 +170,7 @@ def test_large_images_are_downsampled_and_the_page_says_so(tmp_path, comparison_
     build_report(tmp_path, [c], preview_size=128)
     html = (tmp_path / "glass_sphere-paper" / "index.html").read_text("utf-8")
     assert "box-filtered down 4×" in html
-    camera = decode_uri(hdr_uris(tmp_path / "glass_sphere")["camera"]["method"])
+    camera = decode_uri(hdr_uris(tmp_path / "glass_sphere-paper")["camera"]["method"])
     assert camera.shape == (75, 100, 3)
 
 
@@ -224,7 +225,7 @@ def test_crosscheck_section_shows_the_result_when_one_was_run(tmp_path, comparis
         "transport": "full: all L S+ D paths", "other": {"renderer": "luxcore LIGHTCPU"}}}
     checked = replace(comparison, name="checked", crosscheck=table, provenance=provenance)
     build_report(tmp_path, [checked, comparison])
-    page = unescape((tmp_path / "checked" / "index.html").read_text("utf-8"))
+    page = unescape((tmp_path / "checked-paper" / "index.html").read_text("utf-8"))
     section = page[page.index('<section id="crosscheck">'):]
     section = section[:section.index("</section>")]
     assert "luxcore LIGHTCPU" in section and "block (3, 4)" in section
