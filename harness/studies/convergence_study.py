@@ -72,8 +72,10 @@ def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np
             hits = frame.hits
             status = hits["status"].astype(int)
             # Vertices the estimator worked on: a ray left the object (no TIR, no
-            # missing exit surface) and was followed to a hit, a loss or a divergence.
-            traced = np.isin(status, [STATUS["hit"], STATUS["lost"], STATUS["diverged"]])
+            # missing exit surface) and was followed to a hit, a loss, a divergence
+            # or (verified hits) an estimate that failed verification.
+            traced = np.isin(status, [STATUS["hit"], STATUS["lost"], STATUS["diverged"],
+                                      STATUS["unconverged"]])
             exact = tracer(hits["origin"][traced], hits["direction"][traced])
             history = hits["history"][traced].astype(np.float64)
             history[status[traced] == STATUS["diverged"], -1] = np.nan
