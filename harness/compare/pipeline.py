@@ -27,7 +27,7 @@ from harness.compare.evaluate import exposure_for, score_view
 from harness.compare.regions import caustic_region, object_mask
 from harness.studies.claims import check_five_iterations, check_one_iteration
 from harness.studies.convergence_study import convergence_study
-from harness.studies.cost_study import cost_study
+from harness.studies.cost_study import cost_study, sweep_size
 from harness.studies.runner import RealtimeRunner
 from renderers.methods import Method, load_method
 from renderers.mitsuba.reference import render_reference
@@ -248,7 +248,8 @@ def compare_scene(scene: Scene, *, method: Method | None = None,
                 bar.close()
             claims = _claims(convergence)
         if "cost" in studies:
-            bar, tick = _progress_bar(30, options.progress, f"{scene.name}: cost sweep")
+            total = sweep_size(runner.settings, quick=options.quick)
+            bar, tick = _progress_bar(total, options.progress, f"{scene.name}: cost sweep")
             cost, speedup, speedup_point = cost_study(
                 runner, ref0, caustic0, reference_photons=int(reference.metadata["photons"]),
                 quick=options.quick, progress=tick)

@@ -47,6 +47,17 @@ def sweep_configs(*, quick: bool, splat: str = "points") -> list[dict]:
     return configs
 
 
+def sweep_size(settings, *, quick: bool) -> int:
+    """Renders a :func:`cost_study` reports to its progress callable: every sweep
+    configuration and every reference budget of the reference's curve."""
+    return len(sweep_configs(quick=quick, splat=settings.splat)) + len(_fractions(quick))
+
+
+def _fractions(quick: bool) -> tuple[int, ...]:
+    """The reference curve's budgets, as fractions 1/n of the reference's photons."""
+    return (64, 16, 4) if quick else (256, 64, 16, 4)
+
+
 def _row(series: str, label: str, **values) -> dict:
     """One cost-table row by column name (``pareto`` is added once all rows exist)."""
     return {"series": series, "label": label, **values}
@@ -88,7 +99,7 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
                          relmse=error))
         if progress is not None:
             progress()
-    fractions = (64, 16, 4) if quick else (256, 64, 16, 4)
+    fractions = _fractions(quick)
     ref_times, ref_errors = [], []
     for fraction in fractions:
         photons = max(1, reference_photons // fraction)
