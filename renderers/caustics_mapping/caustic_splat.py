@@ -64,10 +64,13 @@ def _record_vertex_array(program: moderngl.Program, trace: Trace) -> moderngl.Ve
 
 def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: SplatOptions,
                 *, max_radius: float, uniforms: Callable[[moderngl.Program], None],
-                passes: int = 1, before_pass: Callable[[int], None] | None = None) -> None:
+                passes: int = 1,
+                before_pass: Callable[[int, list[moderngl.Program]], None] | None = None,
+                ) -> None:
     """Draw every trace's kernels with program ``name`` into the bound framebuffer,
     additively. ``uniforms(program)`` sets the pass's own uniforms;
-    ``before_pass(k)`` runs before each of ``passes`` repeats (the caustic map's faces).
+    ``before_pass(k, programs)`` runs before each of ``passes`` repeats (the caustic
+    map's faces).
     """
     gaussians = load_program(ctx, name)
     programs = [gaussians]
@@ -95,7 +98,7 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
                        ctx.vertex_array(programs[-1], []) if len(programs) > 1 else None))
     for k in range(passes):
         if before_pass is not None:
-            before_pass(k)
+            before_pass(k, programs)
         for trace, points, quads, triangles in arrays:
             trace.records.bind_to_storage_buffer(0)
             points.render(moderngl.POINTS, vertices=trace.count)
@@ -122,12 +125,7 @@ def splat_caustic_map(
         set_light_uniforms(program, light)
         set_uniform(program, "u_size", size)
 
-    programs = [load_program(ctx, "caustic_splat.glsl")]
-    if options.mode == "triangles":
-        programs.append(load_program(ctx, "caustic_splat.glsl", defines={"TRIANGLES": 1},
-                                     geometry=True))
-
-    def face(k: int) -> None:
+    def face(k: int, programs: list[moderngl.Program]) -> None:
         slot, index = k, light.map_faces[k]
         fbo.viewport = (slot * size, 0, size, size)
         fbo.scissor = (slot * size, 0, size, size)
