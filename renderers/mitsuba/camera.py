@@ -9,6 +9,12 @@ the image holds the same light paths as the photon tracer's maps (the
 ``chain_dielectric`` BSDF makes TIR absorb and Fresnel optional in the same way).
 Russian roulette is disabled (rr_depth > max_depth).
 
+ptracer does not say how much light its ``max_depth`` stopped, so in all-paths
+mode :func:`camera_cut_fraction` measures it: the same seed rendered again with
+twice the event limit traces the same paths (each particle draws from its own
+stream, so the shorter render's paths are prefixes of the longer one's), and the
+difference of the two images is the light of the paths the cap cut.
+
 Limits, recorded in the result's metadata: specular objects seen directly are
 black, and so is anything seen only through one, e.g. a pool floor under the
 water surface (ptracer cannot connect through a delta BSDF to the pinhole; the
@@ -28,7 +34,7 @@ from scenes import effects_of, event_chain
 from scenes.geometry import SceneGeometry, build_geometry
 from scenes.model import Scene
 
-__all__ = ["CAMERA_LIMITS", "camera_max_depth", "render_camera"]
+__all__ = ["CAMERA_LIMITS", "camera_cut_fraction", "camera_max_depth", "render_camera"]
 
 CAMERA_LIMITS = (
     "specular objects seen directly render black (ptracer)",
@@ -49,7 +55,8 @@ def camera_max_depth(scene: Scene) -> int:
 
 
 def render_camera(scene: Scene, *, spp: int, seed: int, sensor: dict | None = None,
-                  geometry: SceneGeometry | None = None) -> np.ndarray:
+                  geometry: SceneGeometry | None = None,
+                  max_depth: int | None = None) -> np.ndarray:
     """One seed of the ptracer camera image.
 
     Parameters
@@ -58,6 +65,8 @@ def render_camera(scene: Scene, *, spp: int, seed: int, sensor: dict | None = No
         Particles per pixel (ptracer traces ``spp * W * H`` light paths).
     sensor
         A Mitsuba sensor dict; default the scene camera (:func:`.exporter.sensor_dict`).
+    max_depth
+        ptracer's path limit in segments; default :func:`camera_max_depth`.
 
     Returns
     -------
@@ -66,7 +75,7 @@ def render_camera(scene: Scene, *, spp: int, seed: int, sensor: dict | None = No
     """
     mi, _, _ = _mi.load()
     geometry = geometry or build_geometry(scene)
-    depth = camera_max_depth(scene)
+    depth = max_depth if max_depth is not None else camera_max_depth(scene)
     integrator = {"type": "ptracer", "max_depth": depth, "rr_depth": depth + 1}
     channels = [0, 1, 2] if "dispersion" in effects_of(scene) else [None]
     image = None
@@ -80,3 +89,36 @@ def render_camera(scene: Scene, *, spp: int, seed: int, sensor: dict | None = No
         out = np.asarray(mi.render(exported.scene, spp=spp, seed=pass_seed), dtype=np.float64)
         image = out if image is None else image + out
     return image[..., :3].astype(np.float32)
+
+
+def camera_cut_fraction(scene: Scene, *, spp: int, seed: int, image: np.ndarray,
+                        geometry: SceneGeometry | None = None) -> float:
+    """Fraction of the camera image's light on paths longer than the event cap.
+
+    Renders seed ``seed`` again with twice the specular events
+    (2 x MAX_SPECULAR_EVENTS + 2 segments); its paths extend those of ``image``,
+    rendered with the same seed and ``spp`` at :func:`camera_max_depth`, so
+    ``(longer - image) / longer``, summed over pixels, is what the cap cut from the
+    image (max over RGB). Paths longer than twice the cap are not counted; the
+    photon tracer shows none survive that long on the bundled scenes.
+
+    Parameters
+    ----------
+    image : ndarray, (H, W, 3)
+        :func:`render_camera` of the same scene, ``spp`` and ``seed``.
+
+    Returns
+    -------
+    float
+        0 in chain mode (ptracer's limit is then the chains' own length: nothing is
+        cut that the chains count); otherwise the measured fraction, >= 0 up to
+        float rounding of the splats' order.
+    """
+    if not scene.settings.all_specular_paths:
+        return 0.0
+    longer = render_camera(scene, spp=spp, seed=seed, geometry=geometry,
+                           max_depth=2 * MAX_SPECULAR_EVENTS + 2).astype(np.float64)
+    total = longer.reshape(-1, 3).sum(axis=0)
+    cut = total - np.asarray(image, dtype=np.float64).reshape(-1, 3).sum(axis=0)
+    fractions = np.divide(cut, total, out=np.zeros(3), where=total > 0)
+    return float(fractions.max())

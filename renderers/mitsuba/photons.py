@@ -65,13 +65,10 @@ from renderers.mitsuba.emission import (
     stratified_square,
 )
 from renderers.mitsuba.exporter import ExportedScene, channel_mask, export_scene
+from renderers.mitsuba.specular import specular_event
 from scenes import effects_of, event_chain
 from scenes.geometry import SceneGeometry, build_geometry
-from scenes.model import (
-    ConductorMaterial,
-    DielectricMaterial,
-    Scene,
-)
+from scenes.model import Scene
 
 __all__ = [
     "MAX_SPECULAR_EVENTS",
@@ -85,9 +82,9 @@ __all__ = [
 #: high enough that it only stops paths trapped by total internal reflection (an
 #: 8-event cap lost 2.4 % of the bunny's caustic flux; the cut flux is recorded).
 MAX_SPECULAR_EVENTS = 64
-#: In all-paths mode, from this depth on the tracer checks every few events whether
-#: any path is still alive and stops as soon as none is (the depth loop is unrolled).
-_CHECK_FROM, _CHECK_EVERY = 8, 4
+#: In all-paths mode, the paths still alive after this many events (about 1 % of the
+#: bunny's) are compacted and followed in one symbolic loop up to the cap.
+_TAIL_FROM = 8
 #: Photons per kernel launch (memory ~ 100 B per lane).
 DEFAULT_BATCH = 1 << 20
 
@@ -134,6 +131,10 @@ class PhotonSums:
         Sum of the weights of paths still alive when the safety cap stopped them
         (all-paths mode; zero otherwise). ``cut / emitted`` is the fraction of the
         emitted flux lost to the path limit.
+    casts : int
+        Ray casts the photons' paths made (past the direct-light pass), summed
+        over lanes and events: the tracer's work, to set its cost beside the
+        events a path limit allows.
     """
 
     total: list
@@ -141,6 +142,7 @@ class PhotonSums:
     photons: int
     emitted: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     cut: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    casts: int = 0
 
 
 def _lane_rng(n: int, key: int):
@@ -267,7 +269,7 @@ class PhotonTracer:
         caustic = [dr.zeros(mi.Float, w * h * 3) for _ in range(n_rec)]
         batch = max(1, min(batch, photons))
         launches = -(-photons // batch)
-        emitted, cut = np.zeros(3), np.zeros(3)
+        emitted, cut, casts = np.zeros(3), np.zeros(3), 0
         for c in self.channels:
             for launch in range(launches):
                 key = ((seed * 1_000_003 + stream) * 7 + (0 if c is None else c + 1)) \
@@ -276,16 +278,18 @@ class PhotonTracer:
                 dr.eval(total, caustic)
                 emitted += flux[0]
                 cut += flux[1]
+                casts += flux[2]
         shape = (h, w, 3)
         return PhotonSums(
             total=None if total is None
             else [np.asarray(t, dtype=np.float64).reshape(shape) for t in total],
             caustic=[np.asarray(t, dtype=np.float64).reshape(shape) for t in caustic],
-            photons=launches * batch, emitted=emitted, cut=cut,
+            photons=launches * batch, emitted=emitted, cut=cut, casts=casts,
         )
 
     def _launch(self, n: int, key: int, channel, total, caustic) -> tuple[np.ndarray, ...]:
-        """Trace one batch; returns (emitted, cut) weight sums (RGB, see PhotonSums)."""
+        """Trace one batch; returns the (emitted, cut) weight sums (RGB) and the ray
+        casts (see PhotonSums)."""
         mi, _, _ = _mi.load()
         rng = _lane_rng(n, key)
         square = stratified_square(rng, n)
@@ -299,115 +303,124 @@ class PhotonTracer:
                           receiver_ids=self.receivers_only.receiver_ids, total=total, caustic=None)
         # Only all-paths mode has a path limit to account for; chain mode cuts nothing.
         emitted = _rgb_sum(weight, n) if self.all_paths else np.zeros(3)
-        cut = self._trace_chain(exported, ray, weight, rng=rng, channel=channel, total=total,
+        cut, casts = self._trace_chain(exported, ray, weight, rng=rng, channel=channel,
+                                       total=total,
                                 caustic=caustic, lanes=n)
-        return emitted, cut
+        return emitted, cut, casts
 
     def _trace_chain(self, exported: ExportedScene, ray, weight, *, rng, channel,
-                     total, caustic, lanes: int) -> np.ndarray:
+                     total, caustic, lanes: int) -> tuple[np.ndarray, int]:
         """Follow the photons through their specular events, depositing the counted
-        ones; returns the weight sum (RGB) of paths the safety cap stopped."""
+        ones; returns the weight sum (RGB) of paths the safety cap stopped and the
+        number of ray casts traced (lanes x events, the tracer's work).
+
+        The first events are unrolled in Python (chain mode needs the event codes
+        of each depth). In all-paths mode, the few paths still alive after
+        :data:`_TAIL_FROM` events are compacted and followed in one Dr.Jit
+        symbolic loop up to the cap, so long chains of total internal reflection
+        cost only the ray casts they make.
+        """
         mi, dr, _ = _mi.load()
         active = mi.Bool(True)
         code = mi.UInt32(0)
         first = mi.UInt32(0)
         mixed = mi.Bool(False)
         sigma = mi.Color3f(0.0)
-        objs = self.geometry.objects
-        for depth in range(self.max_events + 1):
-            if self.all_paths and depth >= _CHECK_FROM and depth % _CHECK_EVERY == 0:
-                # Wavefront compaction: keep only the paths still alive, so long
-                # TIR chains cost in proportion to the photons that make them.
-                idx = dr.compress(active)
-                lanes = dr.width(idx)
-                if lanes == 0:
-                    return np.zeros(3)
-                ray, weight, rng = (dr.gather(type(x), x, idx) for x in (ray, weight, rng))
-                code, first, mixed, sigma = (dr.gather(type(x), x, idx)
-                                             for x in (code, first, mixed, sigma))
-                active = dr.full(mi.Bool, True, lanes)
-                dr.eval(ray, weight, rng, code, first, mixed, sigma, total, caustic)
-            si = exported.scene.ray_intersect(ray, active)
-            hit = active & si.is_valid()
-            sid = dr.reinterpret_array(mi.UInt32, si.shape)
-            weight *= dr.exp(-sigma * dr.select(hit, si.t, 0.0))
-            # Which photons reaching a receiver now are counted.
-            if self.all_paths:
-                ok = code != 0
-            else:
-                ok = mi.Bool(False)
-                for j, oid in enumerate(exported.object_ids):
-                    if self.chain_codes[j] > 0:
-                        ok |= (first == oid) & (code == self.chain_codes[j])
-                ok &= ~mixed
-            if self.direct_full:
-                ok |= code == 0
+        tail = self.all_paths and self.max_events > _TAIL_FROM
+        head = _TAIL_FROM if tail else self.max_events
+        cast = mi.UInt32(0)  # ray casts per lane
+        for depth in range(head + 1):
+            cast += dr.select(active, 1, 0)
+            si, hit, weight = self._arrive(exported, ray, weight, sigma, active)
             if depth in self.deposit_depths:
+                if self.all_paths:
+                    ok = mi.Bool(depth > 0)
+                else:
+                    ok = mi.Bool(False)
+                    for j, oid in enumerate(exported.object_ids):
+                        if self.chain_codes[j] > 0:
+                            ok |= (first == oid) & (code == self.chain_codes[j])
+                    ok &= ~mixed
+                if self.direct_full:
+                    ok |= code == 0
                 self._deposit(si, ray.d, weight, hit & ok, receiver_ids=exported.receiver_ids,
                               total=total, caustic=caustic if depth > 0 else None)
-            is_obj = mi.Bool(False)
-            for oid in exported.object_ids:
-                is_obj |= sid == oid
-            if depth == self.max_events:
-                # Paths that would go on: in all-paths mode the cap cuts them, and
-                # their flux is what the cap loses. (Chain mode ends by definition.)
-                if not self.all_paths:
-                    return np.zeros(3)
-                return _rgb_sum(dr.select(hit & is_obj, weight, 0.0), lanes)
-            active = hit & is_obj
-            # Per-lane material of the object hit.
-            kind = mi.UInt32(0)  # 0 absorb (diffuse), 1 dielectric, 2 conductor
-            eta = mi.Float(1.0)
-            obj_sigma = mi.Color3f(0.0)
-            refl = mi.Color3f(1.0)
-            fres = mi.Bool(False)
-            for j, oid in enumerate(exported.object_ids):
-                m = objs[j].material
-                here = sid == oid
-                if isinstance(m, DielectricMaterial):
-                    kind = dr.select(here, 1, kind)
-                    eta = dr.select(here, float(m.iors[0 if channel is None else channel]), eta)
-                    obj_sigma = dr.select(here, mi.Color3f(*map(float, m.absorption)), obj_sigma)
-                    fres = dr.select(here, bool(m.fresnel), fres)
-                elif isinstance(m, ConductorMaterial):
-                    kind = dr.select(here, 2, kind)
-                    refl = dr.select(here, mi.Color3f(*map(float, m.reflectance)), refl)
-            active &= kind != 0
-            d = ray.d
-            n = si.sh_frame.n
-            entering = dr.dot(d, si.n) < 0  # geometric normal: which side we come from
-            nf = dr.select(dr.dot(d, n) < 0, n, -n)  # shading normal facing d's origin
-            cos_i = dr.clip(-dr.dot(d, nf), 0.0, 1.0)
-            rel = dr.select(entering, dr.rcp(eta), eta)  # n1 / n2
-            k = 1.0 - rel * rel * (1.0 - cos_i * cos_i)
-            tir = k < 0
-            t_dir = dr.normalize(rel * d + (rel * cos_i - dr.sqrt(dr.maximum(k, 0.0))) * nf)
-            r_dir = dr.normalize(d + 2.0 * cos_i * nf)
-            f, _, _, _ = mi.fresnel(dr.select(entering, cos_i, -cos_i), eta)
-            u = rng.next_float32()
-            dielectric = kind == 1
-            reflect = dr.select(fres, u < f, tir & self.all_paths)
-            drop = dielectric & ~fres & tir & (not self.all_paths)
-            reflect = dr.select(dielectric, reflect, True)
-            weight = dr.select(kind == 2, weight * refl, weight)
-            new_d = dr.select(reflect, r_dir, t_dir)
-            if self.shading_correction:
-                ng = si.n
-                num = dr.abs(dr.dot(d, n)) * dr.abs(dr.dot(new_d, ng))
-                den = dr.abs(dr.dot(d, ng)) * dr.abs(dr.dot(new_d, n))
-                # A direction in the tangent plane of either normal has measure zero;
-                # such a photon is dropped (factor 0), as in pbrt.
-                factor = dr.select(den > 0, num / dr.maximum(den, 1e-30), 0.0)
-                weight = dr.select(active, weight * factor, weight)
-            # Medium after the event: reflection keeps it; transmission enters the
-            # object's medium or leaves to vacuum (objects do not nest).
-            sigma = dr.select(reflect, sigma, dr.select(entering, obj_sigma, mi.Color3f(0.0)))
-            event = dr.select(reflect, mi.UInt32(_R), mi.UInt32(_T))
+            if depth == self.max_events and not self.all_paths:
+                dr.eval(cast, total, caustic)
+                return np.zeros(3), _total(cast, lanes)  # every chain ends here
+            event = self._event(exported, si, ray=ray, weight=weight, sigma=sigma, rng=rng,
+                                hit=hit, channel=channel)
+            sid = dr.reinterpret_array(mi.UInt32, si.shape)
             first = dr.select(depth == 0, sid, first)
             mixed |= sid != first
-            code = code * 3 + event
-            active &= ~drop
-            ray = si.spawn_ray(new_d)
+            code = code * 3 + dr.select(event.reflected, mi.UInt32(_R), mi.UInt32(_T))
+            ray, weight, sigma, active = event.ray, event.weight, event.sigma, event.going_on
+            if depth == self.max_events:
+                # Paths that would go on: the cap cuts them, and their flux is what
+                # the cap loses.
+                alive = dr.select(active, weight, 0.0)
+                dr.eval(alive, cast, total, caustic)  # one kernel for the whole path
+                return _rgb_sum(alive, lanes), _total(cast, lanes)
+        # Wavefront compaction: keep only the paths still alive. The state is
+        # evaluated in one kernel first: each gather from an unevaluated array would
+        # otherwise re-run every event so far in a kernel of its own.
+        dr.eval(ray, weight, rng, sigma, active, cast, total, caustic)
+        casts = _total(cast, lanes)
+        idx = dr.compress(active)
+        lanes = dr.width(idx)
+        if lanes == 0:
+            return np.zeros(3), casts
+        ray, weight, rng, sigma = (dr.gather(type(x), x, idx) for x in (ray, weight, rng, sigma))
+        ray, weight, sigma, active, casts_tail = self._tail(
+            exported, ray, weight, sigma, rng, channel=channel, total=total, caustic=caustic,
+            lanes=lanes)
+        return _rgb_sum(dr.select(active, weight, 0.0), lanes), casts + casts_tail
+
+    def _tail(self, exported: ExportedScene, ray, weight, sigma, rng, *, channel, total,
+              caustic, lanes: int):
+        """Events ``_TAIL_FROM + 1`` .. cap of the surviving paths in one symbolic loop
+        (all-paths mode: every receiver hit counts); returns the state after the
+        cap's event and the ray casts made."""
+        mi, dr, _ = _mi.load()
+
+        def step(*state):
+            ray, weight, sigma, rng, active, depth, casts = state
+            si, hit, weight = self._arrive(exported, ray, weight, sigma, active)
+            self._deposit(si, ray.d, weight, hit, receiver_ids=exported.receiver_ids,
+                          total=total, caustic=caustic)
+            event = self._event(exported, si, ray=ray, weight=weight, sigma=sigma, rng=rng,
+                                hit=hit, channel=channel)
+            # Lanes that stopped keep their state (the loop masks them out).
+            return (event.ray, event.weight, event.sigma, rng, event.going_on, depth + 1,
+                    casts + 1)
+
+        state = (ray, weight, sigma, rng, dr.full(mi.Bool, True, lanes),
+                 dr.full(mi.UInt32, _TAIL_FROM + 1, lanes), dr.zeros(mi.UInt32, lanes))
+        ray, weight, sigma, rng, active, _, casts = dr.while_loop(
+            state=state,
+            cond=lambda *state: state[4] & (state[5] <= self.max_events),
+            body=step,
+            labels=("ray", "weight", "sigma", "rng", "active", "depth", "casts"),
+            label="photon_tail",
+        )
+        dr.eval(ray, weight, active, casts, total, caustic)
+        return ray, weight, sigma, active, _total(casts, lanes)
+
+    def _arrive(self, exported: ExportedScene, ray, weight, sigma, active):
+        """Cast ``ray`` for the ``active`` lanes; attenuate by Beer-Lambert over the
+        segment (``sigma`` of the medium travelled, 1/m). Returns (si, hit, weight)."""
+        _, dr, _ = _mi.load()
+        si = exported.scene.ray_intersect(ray, active)
+        hit = active & si.is_valid()
+        weight = weight * dr.exp(-sigma * dr.select(hit, si.t, 0.0))
+        return si, hit, weight
+
+    def _event(self, exported: ExportedScene, si, *, ray, weight, sigma, rng, hit, channel):
+        """The specular event at ``si`` (:func:`.specular.specular_event`)."""
+        return specular_event(si, ray, weight, sigma, rng, hit=hit,
+                              object_ids=exported.object_ids, objects=self.geometry.objects,
+                              channel=channel, all_paths=self.all_paths,
+                              shading_correction=self.shading_correction)
 
     def _deposit(self, si, d, weight, mask, *, receiver_ids, total, caustic) -> None:
         """scatter_reduce the photons of ``mask`` into the texel their (u, v) falls in."""
@@ -431,6 +444,12 @@ class PhotonTracer:
                     dr.scatter_reduce(dr.ReduceOp.Add, total[r], value[ch], index + ch, m)
                 if caustic is not None:
                     dr.scatter_reduce(dr.ReduceOp.Add, caustic[r], value[ch], index + ch, m)
+
+
+def _total(count, lanes: int) -> int:
+    """Sum of a per-lane UInt32 count over ``lanes`` lanes, as an int."""
+    mi, dr, _ = _mi.load()
+    return int(dr.sum(dr.zeros(mi.UInt64, lanes) + mi.UInt64(count))[0])
 
 
 def _rgb_sum(weight, lanes: int) -> np.ndarray:

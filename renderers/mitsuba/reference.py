@@ -21,7 +21,12 @@ from tqdm import tqdm
 
 from renderers.mitsuba import _mi
 from renderers.mitsuba.cache import cache_dir, cache_key, entry_lock, load_entry, write_result_dir
-from renderers.mitsuba.camera import CAMERA_LIMITS, camera_max_depth, render_camera
+from renderers.mitsuba.camera import (
+    CAMERA_LIMITS,
+    camera_cut_fraction,
+    camera_max_depth,
+    render_camera,
+)
 from renderers.mitsuba.noise import caustic_region, relative_noise, seed_statistics
 from renderers.mitsuba.photons import (
     DEFAULT_BATCH,
@@ -98,6 +103,15 @@ def _cut_fraction(emitted: np.ndarray, cut: np.ndarray) -> float:
     return float(fractions.max())
 
 
+def _warn_cut(scene: Scene, fraction: float, what: str) -> None:
+    """CutFluxWarning naming the scene when the cap cut more than CUT_WARNING."""
+    if fraction > CUT_WARNING:
+        warnings.warn(f"{scene.name}: the safety cap of {MAX_SPECULAR_EVENTS} specular events "
+                      f"cut off {fraction:.2e} of the {what} "
+                      "(paths trapped by total internal reflection)", CutFluxWarning,
+                      stacklevel=3)
+
+
 def _progress(total: int, desc: str, enabled: bool):
     if not enabled:
         return nullcontext(None)
@@ -166,11 +180,7 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
                 stopped = "target_noise"
                 break
     cut_fraction = _cut_fraction(emitted, cut)
-    if cut_fraction > CUT_WARNING:
-        warnings.warn(f"{scene.name}: the safety cap of {MAX_SPECULAR_EVENTS} specular events "
-                      f"cut off {cut_fraction:.2e} of the emitted caustic flux "
-                      "(paths trapped by total internal reflection)", CutFluxWarning,
-                      stacklevel=2)
+    _warn_cut(scene, cut_fraction, "emitted caustic flux")
     return ReceiverEstimate(maps=None if caustic_only else tuple(maps), caustic=tuple(caustic),
                             photons=traced, relative_noise=noise, stopped_by=stopped,
                             history=tuple(history), seeds=k, seed=first,
@@ -197,6 +207,12 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> Render
         frames.append(render_camera(scene, spp=s.spp, seed=seed, geometry=geometry))
     camera, camera_var = seed_statistics(np.stack(frames))
     timings["camera"] = time.perf_counter() - start
+    start = time.perf_counter()
+    camera_cut = camera_cut_fraction(scene, spp=s.spp, seed=s.seed, image=frames[0],
+                                     geometry=geometry)
+    if s.all_specular_paths:
+        timings["camera_cut_probe"] = time.perf_counter() - start
+    _warn_cut(scene, camera_cut, "camera image")
     metadata = {
         "hash": key,
         "variant": versions["variant"],
@@ -215,11 +231,9 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> Render
         "cut_flux_fraction": est.cut_fraction,
         "max_specular_events": MAX_SPECULAR_EVENTS,
         "camera_max_depth": camera_max_depth(scene),
-        # ptracer stops at max_depth without telling how much flux it stopped; in
-        # all-paths mode that is the photon tracer's cap + 2, so the photon tracer's
-        # cut_flux_fraction measures the same paths.
-        "camera_cut_flux_fraction": "not measurable in ptracer; same path limit as the "
-                                    "photon tracer (cut_flux_fraction)",
+        # Share of the camera image's light on paths past the cap, measured by one
+        # seed rendered again with twice the cap (camera.camera_cut_fraction).
+        "camera_cut_fraction": camera_cut,
         "camera_integrator": "ptracer",
         "camera_limits": list(CAMERA_LIMITS),
         "scene": scene.name,

@@ -11,6 +11,7 @@ import time
 import numpy as np
 import pytest
 
+from harness.crosscheck import full_transport
 from renderers.mitsuba import photons as module
 from renderers.mitsuba.photons import PhotonTracer
 from renderers.mitsuba.reference import estimate_receivers
@@ -51,30 +52,40 @@ def test_time_to_one_percent_noise(benchmark, glass_sphere):
 
 
 def test_cost_of_the_path_limit(request, monkeypatch):
-    """Bunny, all L S+ D paths: photons per second with the old 8-event cap and the
-    64-event safety cap, warm (each compiled once first), same seeds, rounds
-    alternating between the two so that load and clock drift hit both alike. The
-    ratio is the cost of keeping the light that long TIR chains carry; the cut flux
-    fraction is printed beside each."""
+    """Bunny, full transport (all L S+ D paths, Fresnel): photons per second with the
+    old 8-event cap and the 64-event safety cap, warm (each compiled once first),
+    same seeds, rounds alternating between the two so that load and clock drift hit
+    both alike. The time ratio is the cost of keeping the light that long TIR chains
+    carry; beside it, the extra work those chains are (ray casts with the 64-event
+    cap over ray casts with the 8-event cap, counted by the tracer) and the cut flux
+    fraction of each cap. Issue 21 asks that the time ratio exceed 1 by no more than
+    the extra work does."""
     pytest.importorskip("pymeshlab")
-    scene = with_settings(load_scene(request.config.rootpath / "scenes" / "bunny.toml"),
-                          {"all_specular_paths": True, "receiver_map": [256, 256]})
+    scene = full_transport(with_settings(
+        load_scene(request.config.rootpath / "scenes" / "bunny.toml"),
+        {"receiver_map": [256, 256]}))
     n, caps, tracers = 1 << 21, (8, module.MAX_SPECULAR_EVENTS), {}
     for cap in caps:
         monkeypatch.setattr(module, "MAX_SPECULAR_EVENTS", cap)
         tracers[cap] = module.PhotonTracer(scene, caustic_only=True)  # reads the cap here
         tracers[cap].trace(1 << 20, seed=99)  # compile once
-    times, cut = {cap: [] for cap in caps}, {}
+    times, cut, casts = {cap: [] for cap in caps}, {}, {cap: 0 for cap in caps}
     for seed in range(7):
         for cap in caps:
             start = time.perf_counter()
             sums = tracers[cap].trace(n, seed=seed)
             times[cap].append(time.perf_counter() - start)
             cut[cap] = float((sums.cut / sums.emitted).max())
+            casts[cap] += sums.casts
     for cap in caps:
         rate = n / float(np.median(times[cap]))
-        print(f"\nbunny all paths, cap {cap}: {rate / 1e6:.3f} M photons/s (median of 7, warm), "
+        print(f"\nbunny full transport, cap {cap}: {rate / 1e6:.3f} M photons/s (median of 7, "
+              f"warm), {casts[cap] / (7 * n):.4f} ray casts per photon, "
               f"cut flux fraction {cut[cap]:.2e}")
     ratios = np.array(times[caps[1]]) / np.array(times[caps[0]])
-    print(f"cap {caps[1]} / cap {caps[0]} time ratio per round: median "
-          f"{np.median(ratios):.3f}, range {ratios.min():.3f}..{ratios.max():.3f}")
+    work = casts[caps[1]] / casts[caps[0]]
+    print(f"cap {caps[1]} / cap {caps[0]}: time ratio per round median {np.median(ratios):.3f} "
+          f"(range {ratios.min():.3f}..{ratios.max():.3f}); ray-cast ratio {work:.4f}")
+    benchmark_info = request.node.user_properties
+    benchmark_info.append(("time_ratio_median", float(np.median(ratios))))
+    benchmark_info.append(("ray_cast_ratio", work))

@@ -19,7 +19,7 @@ def test_reference_command_writes_files_and_keys(tmp_path):
     assert status == 0
     document = json.loads((out / "result.json").read_text())
     for key in ("receiver_extent", "event_chains", "photons", "spp", "seed", "relative_noise",
-                "timings", "variant", "cut_flux_fraction", "camera_cut_flux_fraction"):
+                "timings", "variant", "cut_flux_fraction", "camera_cut_fraction"):
         assert key in document, key
     assert document["receiver_extent"] == [[-2.0, 2.0, -2.0, 2.0]]
     assert document["seed"] == 3 and document["spp"] == 2
