@@ -10,6 +10,7 @@ from __future__ import annotations
 from scenes.model import (
     ConductorMaterial,
     DielectricMaterial,
+    MeshObject,
     RingObject,
     Scene,
     WaterSurface,
@@ -26,6 +27,8 @@ EFFECTS: dict[str, str] = {
     "dispersion": "a different IOR per RGB channel (paper Fig. 13b)",
     "shadows": "caustic objects occlude the light's direct illumination of receivers",
     "fresnel": "specular events are weighted by the Fresnel factor",
+    "open_mesh": "a mesh object is not watertight: rendered as an open surface, with no "
+    "back-face culling (the shadow map included); a conductor reflects on both sides",
 }
 
 
@@ -44,7 +47,10 @@ def effects_of(scene: Scene) -> tuple[str, ...]:
     * a dielectric with any non-zero absorption coefficient -> ``absorption``;
     * a dielectric whose three channel IORs differ -> ``dispersion``;
     * ``scene.shadows`` and ``scene.direct_lighting`` both on -> ``shadows``;
-    * any specular material with ``fresnel = true`` -> ``fresnel``.
+    * any specular material with ``fresnel = true`` -> ``fresnel``;
+    * a mesh object whose mesh is not watertight (legal for conductors and diffuse
+      objects; refused for dielectrics) -> ``open_mesh``. Only this rule reads the
+      mesh files (through :func:`scenes.geometry.build_geometry`, cached).
     """
     found: set[str] = set()
     for obj in scene.objects:
@@ -61,7 +67,21 @@ def effects_of(scene: Scene) -> tuple[str, ...]:
             found.add("fresnel")
     if scene.info.shadows and scene.info.direct_lighting:
         found.add("shadows")
+    if _has_open_mesh(scene):
+        found.add("open_mesh")
     return tuple(name for name in EFFECTS if name in found)
+
+
+def _has_open_mesh(scene: Scene) -> bool:
+    meshes = [i for i, obj in enumerate(scene.objects) if isinstance(obj, MeshObject)]
+    if not meshes:
+        return False
+    # Deferred: scenes.geometry brings trimesh and scipy (about 2 s), which `import
+    # scenes` and `caustics --help` must not pay for; only mesh scenes get here.
+    from scenes.geometry import build_geometry  # noqa: PLC0415
+
+    objects = build_geometry(scene).objects
+    return any(not objects[i].mesh.closed for i in meshes)
 
 
 def event_chain(obj: object) -> str:

@@ -15,12 +15,22 @@ from typing import ClassVar, Literal
 
 import numpy as np
 
+from scenes.precision import precision_problems
 from scenes.schema import spec
 
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
 RGB = tuple[float, float, float]
 Size2 = tuple[int, int]
+
+
+def _dark(name: str, values: RGB) -> list[tuple[str, str]]:
+    """A light that emits nothing: no caustic to compare, and the comparison's
+    relative metrics are undefined on a black reference."""
+    if any(v > 0 for v in values):
+        return []
+    return [(name, "is zero in every channel: the light emits nothing, so the scene "
+             "forms no caustic and a comparison has no reference to measure against")]
 
 
 def _parallel(a: Vec3, b: Vec3) -> bool:
@@ -42,6 +52,9 @@ class PointLight:
     position: Vec3 = spec(doc="Light position.", unit="m")
     intensity: RGB = spec(doc="Radiant intensity per channel.", unit="W/sr", ge=0)
 
+    def validate(self) -> list[tuple[str, str]]:
+        return _dark("intensity", self.intensity)
+
 
 @dataclass(frozen=True)
 class SpotLight:
@@ -56,14 +69,16 @@ class SpotLight:
     beam_width: float | None = spec(
         None,
         doc="Half-angle of full intensity; between it and the cutoff the intensity "
-        "falls off smoothly. Defaults to the cutoff (a hard edge).",
+        "falls off linearly in the angle, to 0 at the cutoff (Mitsuba's spot emitter). "
+        "Defaults to the cutoff (a hard edge).",
         unit="deg", gt=0, lt=90,
     )
 
     def validate(self) -> list[tuple[str, str]]:
+        problems = _dark("intensity", self.intensity)
         if self.beam_width is not None and self.beam_width > self.cutoff_angle:
-            return [("beam_width", "must be <= cutoff_angle")]
-        return []
+            problems.append(("beam_width", "must be <= cutoff_angle"))
+        return problems
 
 
 @dataclass(frozen=True)
@@ -78,6 +93,9 @@ class DirectionalLight:
     irradiance: RGB = spec(
         doc="Irradiance on a surface perpendicular to the rays.", unit="W/m²", ge=0
     )
+
+    def validate(self) -> list[tuple[str, str]]:
+        return _dark("irradiance", self.irradiance)
 
 
 @dataclass(frozen=True)
@@ -96,6 +114,9 @@ class AreaLight:
         "(radiance = intensity / area).", unit="W/sr", ge=0,
     )
     samples: int = spec(16, doc="Point lights sampled on the rectangle.", ge=1, le=1024)
+
+    def validate(self) -> list[tuple[str, str]]:
+        return _dark("intensity", self.intensity)
 
 
 Light = PointLight | SpotLight | DirectionalLight | AreaLight
@@ -281,8 +302,10 @@ class SphereObject:
 
 @dataclass(frozen=True)
 class MeshObject:
-    """Closed triangle mesh from a file, or a built-in (``builtin:bunny``: the
-    Stanford bunny shipped in the pymeshlab wheel)."""
+    """Triangle mesh from a file, or a built-in (``builtin:bunny``: the Stanford
+    bunny shipped in the pymeshlab wheel). A dielectric mesh must be closed
+    (watertight); an open one of another material is rendered as an open surface
+    (no back-face culling; effect `open_mesh`)."""
 
     kind: ClassVar[str] = "mesh"
     section: ClassVar[str] = "`[[objects]]`"
@@ -534,7 +557,7 @@ class Scene:
             problems.append(("receivers", "needs at least one receiver"))
         if not self.objects:
             problems.append(("objects", "needs at least one caustic object"))
-        return problems
+        return problems + precision_problems(self)
 
     @property
     def name(self) -> str:

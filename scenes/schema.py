@@ -6,8 +6,12 @@ declarations to
 
 * convert a parsed TOML table into the dataclass, reporting *every* problem with
   the file and the dotted field path (``objects[0].material.ior: must be >= 1``);
-* reject unknown keys, wrong types, vectors of the wrong length, non-finite numbers
-  and out-of-range values;
+* reject unknown keys, wrong types, vectors of the wrong length, non-finite numbers,
+  numbers outside single precision (both renderers compute in float32: a number
+  must stay finite in float32, and one that must be positive must stay positive),
+  integers outside TOML's 64-bit range, and out-of-range values;
+* keep file paths inside a containment folder (the scene file's), unless the caller
+  allows outside paths;
 * resolve tagged unions by their ``type`` key (``type = "point"``);
 * render the field reference that the README documents (``describe_schema``).
 
@@ -24,13 +28,18 @@ from dataclasses import MISSING, dataclass
 from pathlib import Path
 from typing import Any, Literal, Union
 
+import numpy as np
+
 from scenes.errors import HarnessError
 
 __all__ = [
+    "FLOAT32_MAX",
+    "OUTSIDE_PATHS_VARIABLE",
     "Problem",
     "SceneError",
     "build",
     "describe_schema",
+    "float32_overflows",
     "spec",
     "tag_of",
 ]
@@ -122,11 +131,28 @@ class _Invalid:
 _INVALID = _Invalid()
 
 
+#: Largest finite float32; the renderers (GLSL, Mitsuba's single-precision variants)
+#: hold every scene number in this format.
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+
+#: Environment variable that, set to 1, lets file paths leave the containment folder.
+OUTSIDE_PATHS_VARIABLE = "CAUSTICS_ALLOW_OUTSIDE_PATHS"
+
+
+def float32_overflows(value: float) -> bool:
+    """Whether ``value`` (finite in float64) becomes infinite when cast to float32."""
+    with np.errstate(over="ignore"):
+        return bool(np.isinf(np.float32(value)))
+
+
 @dataclass
 class _Context:
     file: str
     base_dir: Path
     problems: list[Problem]
+    # Folder that every file path must resolve inside; None allows any path.
+    root: Path | None = None
 
     def add(self, path: str, message: str) -> _Invalid:
         self.problems.append(Problem(self.file, path, message))
@@ -163,9 +189,18 @@ def _number(value: Any, path: str, ctx: _Context, *, integer: bool) -> Any:
         return ctx.add(path, f"expected {want}, got {_type_name(value)}")
     if integer and not isinstance(value, int):
         return ctx.add(path, f"expected an integer, got {value!r}")
-    if not math.isfinite(value):
+    if isinstance(value, int) and not -(2**63) <= value < 2**63:
+        # tomllib accepts integers of any size; float() of a huge one raises.
+        return ctx.add(path, "must fit in 64 bits (TOML's integer range)")
+    if integer:
+        return int(value)
+    number = float(value)
+    if not math.isfinite(number):
         return ctx.add(path, f"must be finite, got {value!r}")
-    return int(value) if integer else float(value)
+    if float32_overflows(number):
+        return ctx.add(path, f"{number:g} overflows float32 (largest {FLOAT32_MAX:.3g}); "
+                             "the renderers compute in single precision")
+    return number
 
 
 def _check_bounds(value: Any, meta: dict, path: str, ctx: _Context) -> Any:
@@ -182,6 +217,13 @@ def _check_bounds(value: Any, meta: dict, path: str, ctx: _Context) -> Any:
         bound = meta.get(name)
         if bound is not None and not all(ok(c, bound) for c in comps):
             return ctx.add(path, f"must be {symbol} {bound:g}, got {_show(value)}")
+    gt = meta.get("gt")
+    if gt is not None and any(
+        isinstance(c, float) and not float(np.float32(c)) > gt for c in comps
+    ):
+        # 1e-50 > 0 in float64 but is 0 in float32: a radius or size the GPU sees as 0.
+        return ctx.add(path, f"must be > {gt:g} in float32 too, got {_show(value)}, "
+                             "which single precision rounds to the bound")
     if meta.get("nonzero") and all(c == 0 for c in comps):
         return ctx.add(path, "must not be the zero vector")
     return value
@@ -264,7 +306,15 @@ def _resolve_path(value: str, path: str, ctx: _Context) -> Any:
         return value
     if not value:
         return ctx.add(path, "must name a file")
-    resolved = (ctx.base_dir / value).resolve()
+    try:
+        resolved = (ctx.base_dir / value).resolve()
+    except (OSError, RuntimeError, ValueError) as error:  # symlink loop, NUL byte
+        return ctx.add(path, f"cannot resolve {value!r}: {error}")
+    # Checked before existence, so a refused path says nothing about what lies outside.
+    if ctx.root is not None and not resolved.is_relative_to(ctx.root):
+        return ctx.add(
+            path, f"{value} resolves to {resolved}, outside the scene's folder "
+            f"{ctx.root}; set {OUTSIDE_PATHS_VARIABLE}=1 to allow files outside it")
     if not resolved.is_file():
         return ctx.add(path, f"file not found: {value} (looked at {resolved})")
     return str(resolved)
@@ -327,7 +377,10 @@ def _build_tagged(members: tuple[type, ...], table: Any, path: str, ctx: _Contex
     return _build_dataclass(tags[tag], table, path, ctx)
 
 
-def build(cls: type, table: Any, *, file: str, base_dir: Path, path: str = "") -> Any:
+def build(
+    cls: type, table: Any, *, file: str, base_dir: Path, path: str = "",
+    root: Path | None = None, allow_outside_paths: bool = False,
+) -> Any:
     """Build dataclass ``cls`` from a TOML table, or raise :class:`SceneError`.
 
     Parameters
@@ -342,8 +395,17 @@ def build(cls: type, table: Any, *, file: str, base_dir: Path, path: str = "") -
         Directory against which file fields are resolved.
     path
         Field path prefix for nested builds (``settings`` for overrides).
+    root
+        Folder every file path must resolve inside (symlinks and ``..`` resolved);
+        defaults to ``base_dir``.
+    allow_outside_paths
+        Accept file paths anywhere (absolute paths, ``..`` out of ``root``).
     """
-    ctx = _Context(file=file, base_dir=base_dir, problems=[])
+    if allow_outside_paths:
+        contained = None
+    else:
+        contained = Path(root if root is not None else base_dir).resolve()
+    ctx = _Context(file=file, base_dir=base_dir, problems=[], root=contained)
     result = _build_dataclass(cls, table, path, ctx)
     if ctx.problems or result is _INVALID:
         raise SceneError(ctx.problems)
@@ -407,7 +469,7 @@ def _bounds_text(meta: dict) -> str:
     if meta.get("nonzero"):
         parts.append("non-zero")
     if meta.get("path"):
-        parts.append("file path, relative to the scene file")
+        parts.append("file path, relative to the scene file, inside its folder")
     return "; ".join(parts)
 
 

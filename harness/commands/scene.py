@@ -10,65 +10,89 @@ import argparse
 import json
 import sys
 
-from scenes import EFFECTS, SceneError, default_scene_path, effects_of, load_scene, resolve_scene
-from scenes.geometry import build_geometry
+from harness.terminal import plain
+from scenes import (
+    EFFECTS,
+    Problem,
+    SceneError,
+    default_scene_path,
+    effects_of,
+    load_scene,
+    resolve_scene,
+)
+from scenes.geometry import build_geometry, scene_warnings
 from scenes.model import Scene
 from scenes.schema import describe_schema
 
-__all__ = ["describe", "load_scenes", "schema", "validate"]
+__all__ = ["check_scenes", "describe", "load_scenes", "schema", "validate"]
 
 
-def load_scenes(paths: list[str]) -> list[Scene]:
-    """Load and fully validate scenes (meshes and height files too).
+def check_scenes(paths: list[str]) -> tuple[list[Scene], list[Problem], list[Problem]]:
+    """Load and fully validate scenes: ``(scenes, errors, warnings)``.
 
     Each entry is a file path or a bundled scene name (:func:`scenes.resolve_scene`);
-    with none, the bundled default scene. Raises one :class:`SceneError` holding the
-    problems of every file.
+    with none, the bundled default scene. Everything ``compare`` would refuse is an
+    error here (meshes and height files are read, the geometry checked); a scene
+    with an error is left out of ``scenes``.
     """
-    scenes, problems = [], []
+    scenes, problems, warnings = [], [], []
     for path in paths or [str(default_scene_path())]:
         try:
             scene = load_scene(resolve_scene(path))
             build_geometry(scene)
+            warnings += scene_warnings(scene)
             scenes.append(scene)
         except SceneError as error:
             problems += error.problems
+    return scenes, problems, warnings
+
+
+def load_scenes(paths: list[str]) -> list[Scene]:
+    """Load and fully validate scenes (:func:`check_scenes`); print each warning as
+    one ``warning: ...`` line on stderr (``render``, ``compare`` and the other
+    commands load their scenes here). Raises one :class:`SceneError` holding the
+    problems of every file.
+    """
+    scenes, problems, warnings = check_scenes(paths)
+    for warning in warnings:
+        print(plain(f"warning: {warning}"), file=sys.stderr)
     if problems:
         raise SceneError(problems)
     return scenes
 
 
+def _problem_dicts(problems: list[Problem]) -> list[dict[str, str]]:
+    return [{"file": p.file, "path": p.path, "message": p.message} for p in problems]
+
+
 def validate(args: argparse.Namespace) -> int:
-    scenes, problems = [], []
-    for path in args.scenes or [str(default_scene_path())]:
-        try:
-            scenes.extend(load_scenes([path]))
-        except SceneError as error:
-            problems += error.problems
+    scenes, problems, warnings = check_scenes(args.scenes)
     if args.json:
         report = {
             "scenes": [
                 {"name": s.name, "path": s.source, "effects": list(effects_of(s))}
                 for s in scenes
             ],
-            "errors": [
-                {"file": p.file, "path": p.path, "message": p.message} for p in problems
-            ],
+            "errors": _problem_dicts(problems),
+            "warnings": _problem_dicts(warnings),
         }
         print(json.dumps(report, indent=2))
     else:
         for scene in scenes:
-            print(f"ok  {scene.source}  [{scene.name}]  effects: {', '.join(effects_of(scene))}")
+            print(plain(f"ok  {scene.source}  [{scene.name}]  effects: "
+                        f"{', '.join(effects_of(scene))}"))
+    for warning in warnings:
+        print(plain(f"warning: {warning}"), file=sys.stderr)
     for problem in problems:
-        print(f"error: {problem}", file=sys.stderr)
+        print(plain(f"error: {problem}"), file=sys.stderr)
     return 1 if problems else 0
 
 
 def describe(args: argparse.Namespace) -> int:
     for scene in load_scenes(args.scenes):
         geometry = build_geometry(scene)
-        print(f"scene {scene.name}  ({scene.source})")
-        print(f"  {scene.info.description}")
+        print(plain(f"scene {scene.name}  ({scene.source})"))
+        print(plain(f"  {scene.info.description}"))
         print(f"  light: {type(scene.light).kind}")
         for i, (rec, geo) in enumerate(zip(scene.receivers, geometry.receivers, strict=True)):
             umin, umax, vmin, vmax = geo.extent

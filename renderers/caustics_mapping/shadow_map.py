@@ -39,6 +39,9 @@ def render_shadow_map(
         view_proj = light.map_views[face].view_proj
         program["u_vp"].write(view_proj.T.astype("f4").tobytes())
         for mesh, vao in zip(objects, vaos, strict=True):
+            # Never for an open mesh (water, rings, a mesh that is not watertight:
+            # ``closed`` false, the ``open_mesh`` effect): the light sees its inner
+            # side as back faces, and culling them shrinks its shadow to a crescent.
             cull = mesh.source is not None and back_faces_hidden(mesh.source, view_proj)
             if cull:
                 ctx.enable(moderngl.CULL_FACE)

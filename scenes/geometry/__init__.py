@@ -5,7 +5,9 @@ from scenes.geometry.build import (
     ReceiverGeometry,
     SceneGeometry,
     build_geometry,
+    scene_warnings,
 )
 from scenes.geometry.mesh import TriangleMesh
 
-__all__ = ["ObjectGeometry", "ReceiverGeometry", "SceneGeometry", "TriangleMesh", "build_geometry"]
+__all__ = ["ObjectGeometry", "ReceiverGeometry", "SceneGeometry", "TriangleMesh", "build_geometry",
+           "scene_warnings"]

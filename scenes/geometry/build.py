@@ -2,23 +2,27 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass
 
 import numpy as np
 import trimesh
 
-from scenes.geometry.mesh import (
-    TriangleMesh,
-    apply_transform,
-    builtin_mesh_path,
-    load_mesh_file,
-    make_mesh,
-    transform_matrix,
+from scenes.geometry.checks import (
+    GeometryError,
+    camera_warnings,
+    light_problems,
+    light_warnings,
+    placement_problem,
+    usable_mesh_problem,
 )
+from scenes.geometry.mesh import TriangleMesh, apply_transform, make_mesh, transform_matrix
+from scenes.geometry.meshfile import builtin_mesh_path, load_mesh_file
 from scenes.geometry.surfaces import evaluate_height, grid_mesh_arrays, water_height
 from scenes.model import (
     CausticObject,
+    DielectricMaterial,
     HeightfieldReceiver,
     Material,
     MeshObject,
@@ -27,12 +31,14 @@ from scenes.model import (
     Receiver,
     RingObject,
     Scene,
+    Settings,
     SphereObject,
     WaterSurface,
 )
 from scenes.schema import Problem, SceneError
 
-__all__ = ["ObjectGeometry", "ReceiverGeometry", "SceneGeometry", "build_geometry"]
+__all__ = ["ObjectGeometry", "ReceiverGeometry", "SceneGeometry", "build_geometry",
+           "scene_warnings"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,8 +108,8 @@ def _receiver(rec: Receiver) -> ReceiverGeometry:
         half = np.array(rec.size) / 2
         return ReceiverGeometry(mesh, _extent(-half[0], half[0], -half[1], half[1]), rec.albedo)
     if isinstance(rec, MeshReceiver):
-        mesh = apply_transform(load_mesh_file(rec.file, closed=False),
-                               transform_matrix(rec.transform))
+        mesh = _checked(load_mesh_file(rec.file), closed_required=False)
+        mesh = _placed(apply_transform(mesh, transform_matrix(rec.transform)))
         uvs = mesh.uvs if mesh.uvs is not None else mesh.positions[:, :2].astype(np.float64)
         mesh = make_mesh(mesh.positions, mesh.normals, mesh.faces, uvs)
         lo, hi = uvs.min(axis=0), uvs.max(axis=0)
@@ -124,14 +130,17 @@ def _object(obj: CausticObject) -> TriangleMesh:
             path = builtin_mesh_path(obj.file.removeprefix("builtin:"))
         else:
             path = obj.file
-        mesh = load_mesh_file(path, closed=True)
+        # `closed` is the file's watertightness: an open conductor stays open (drawn
+        # two-sided, never culled); an open dielectric is refused here.
+        dielectric = isinstance(obj.material, DielectricMaterial)
+        mesh = _checked(load_mesh_file(path), closed_required=dielectric)
         if obj.fit_size is not None:
             lo, hi = mesh.bounds
             fit = np.eye(4)
             fit[:3, :3] *= obj.fit_size / float(np.max(hi - lo))
             fit[:3, 3] = -fit[:3, :3] @ ((lo + hi) / 2)
             mesh = apply_transform(mesh, fit)
-        return apply_transform(mesh, transform_matrix(obj.transform))
+        return _placed(apply_transform(mesh, transform_matrix(obj.transform)))
     if isinstance(obj, WaterSurface):
         def height(x, y):
             return water_height(obj, x, y)
@@ -141,6 +150,20 @@ def _object(obj: CausticObject) -> TriangleMesh:
     if isinstance(obj, RingObject):
         return _ring(obj)
     raise TypeError(f"unknown object {obj!r}")
+
+
+def _checked(mesh: TriangleMesh, *, closed_required: bool) -> TriangleMesh:
+    problem = usable_mesh_problem(mesh, closed_required=closed_required)
+    if problem:
+        raise GeometryError("file", problem)
+    return mesh
+
+
+def _placed(mesh: TriangleMesh) -> TriangleMesh:
+    problem = placement_problem(mesh)
+    if problem:
+        raise GeometryError("transform", problem)
+    return mesh
 
 
 def _ring(ring: RingObject) -> TriangleMesh:
@@ -165,28 +188,61 @@ def _ring(ring: RingObject) -> TriangleMesh:
     return make_mesh(pos, nrm, faces)
 
 
-@functools.lru_cache(maxsize=8)
 def build_geometry(scene: Scene) -> SceneGeometry:
     """All meshes of ``scene``, built once and shared by both renderers.
 
     Raises
     ------
     SceneError
-        A mesh or height file cannot be read; the problem names the scene file and
+        A mesh or height file cannot be read or is unusable (degenerate; open for a
+        dielectric; placed beyond float32's range), or the light is inside a closed
+        object (:mod:`scenes.geometry.checks`); each problem names the scene file and
         the field path (``objects[1].file``).
     """
+    # Settings never change geometry: a scene's variants (presets, sweeps, and
+    # effects_of asking whether a mesh is open) share one build.
+    return _build(dataclasses.replace(scene, settings=_SETTINGS))
+
+
+_SETTINGS = Settings()
+
+
+@functools.lru_cache(maxsize=8)
+def _build(scene: Scene) -> SceneGeometry:
     receivers, objects, problems = [], [], []
     for i, rec in enumerate(scene.receivers):
         try:
             receivers.append(_receiver(rec))
-        except (ValueError, FileNotFoundError, OSError) as error:
+        except GeometryError as error:
+            problems.append(Problem(scene.source, f"receivers[{i}].{error.field}", str(error)))
+        except (ValueError, OSError) as error:
             field = "height.file" if hasattr(rec, "height") else "file"
             problems.append(Problem(scene.source, f"receivers[{i}].{field}", str(error)))
     for i, obj in enumerate(scene.objects):
         try:
             objects.append(ObjectGeometry(_object(obj), obj.material))
-        except (ValueError, FileNotFoundError, OSError) as error:
+        except GeometryError as error:
+            problems.append(Problem(scene.source, f"objects[{i}].{error.field}", str(error)))
+        except (ValueError, OSError) as error:
             problems.append(Problem(scene.source, f"objects[{i}].file", str(error)))
     if problems:
         raise SceneError(problems)
-    return SceneGeometry(tuple(receivers), tuple(objects))
+    geometry = SceneGeometry(tuple(receivers), tuple(objects))
+    problems = light_problems(scene, geometry)
+    if problems:
+        raise SceneError(problems)
+    return geometry
+
+
+def scene_warnings(scene: Scene) -> list[Problem]:
+    """Problems of a legal but suspect scene, one line each (see
+    :mod:`scenes.geometry.checks`): the camera inside a closed object, no specular
+    object, a specular object the light cannot reach. Builds the geometry.
+
+    Raises
+    ------
+    SceneError
+        As :func:`build_geometry`.
+    """
+    geometry = build_geometry(scene)
+    return camera_warnings(scene, geometry) + light_warnings(scene, geometry)

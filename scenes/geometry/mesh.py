@@ -3,14 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
-import trimesh
 
 from scenes.model import Transform
 
-__all__ = ["TriangleMesh", "builtin_mesh_path", "load_mesh_file", "transform_matrix"]
+__all__ = ["TriangleMesh", "apply_transform", "make_mesh", "transform_matrix"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -29,7 +27,9 @@ class TriangleMesh:
     uvs : ndarray, shape (N, 2), float32, or None
         Receiver parameter coordinates (metres for planes and heightfields).
     closed : bool
-        The mesh bounds a volume (double refraction applies).
+        The mesh bounds a volume (double refraction applies). False for open
+        surfaces (water, rings, meshes that are not watertight): renderers draw
+        them two-sided and never cull their back faces.
     """
 
     positions: np.ndarray
@@ -66,10 +66,14 @@ class TriangleMesh:
 def make_mesh(positions, normals, faces, uvs=None, *, closed: bool = False) -> TriangleMesh:
     """Build a :class:`TriangleMesh` with the canonical dtypes and unit normals."""
     normals = np.asarray(normals, np.float64)
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    normals = np.where(length > 0, normals / np.maximum(length, 1e-30), [0.0, 0.0, 1.0])
+    with np.errstate(over="ignore", invalid="ignore"):
+        length = np.linalg.norm(normals, axis=1, keepdims=True)
+        usable = (length > 0) & np.isfinite(length)
+        normals = np.where(usable, normals / np.maximum(length, 1e-30), [0.0, 0.0, 1.0])
+        # Beyond float32's range a position becomes inf; geometry checks report it.
+        positions = np.ascontiguousarray(positions, np.float32)
     return TriangleMesh(
-        positions=np.ascontiguousarray(positions, np.float32),
+        positions=positions,
         normals=np.ascontiguousarray(normals, np.float32),
         faces=np.ascontiguousarray(faces, np.uint32),
         uvs=None if uvs is None else np.ascontiguousarray(uvs, np.float32),
@@ -95,45 +99,3 @@ def apply_transform(mesh: TriangleMesh, m: np.ndarray) -> TriangleMesh:
     p = mesh.positions.astype(np.float64) @ m[:3, :3].T + m[:3, 3]
     n = mesh.normals.astype(np.float64) @ np.linalg.inv(m[:3, :3])
     return make_mesh(p, n, mesh.faces, mesh.uvs, closed=mesh.closed)
-
-
-def builtin_mesh_path(name: str) -> Path:
-    """Path of a built-in mesh (``bunny``: the Stanford bunny inside pymeshlab's wheel).
-
-    Raises
-    ------
-    FileNotFoundError
-        With the install command, when the package that ships the mesh is missing.
-    """
-    if name != "bunny":
-        raise FileNotFoundError(f"unknown built-in mesh {name!r} (known: bunny)")
-    try:
-        import pymeshlab  # noqa: PLC0415 - optional extra `bunny`, only for the bunny
-    except ImportError:
-        raise FileNotFoundError(
-            "builtin:bunny needs the optional extra: pip install 'caustics-harness[bunny]'"
-        ) from None
-    path = Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "bunny.obj"
-    if not path.is_file():
-        raise FileNotFoundError(f"pymeshlab no longer ships {path}")
-    return path
-
-
-def load_mesh_file(path: str | Path, *, closed: bool) -> TriangleMesh:
-    """Load OBJ/PLY with trimesh, merge duplicate vertices, area-weighted smooth normals.
-
-    Raises
-    ------
-    ValueError
-        The file holds no triangles or is not a mesh.
-    """
-
-    loaded = trimesh.load(str(path), force="mesh", process=True)
-    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        raise ValueError("holds no triangles")
-    uvs = None
-    visual = getattr(loaded, "visual", None)
-    if visual is not None and getattr(visual, "uv", None) is not None:
-        if len(visual.uv) == len(loaded.vertices):
-            uvs = np.asarray(visual.uv)
-    return make_mesh(loaded.vertices, loaded.vertex_normals, loaded.faces, uvs, closed=closed)
