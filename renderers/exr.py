@@ -2,7 +2,8 @@
 
 Images are float32 arrays of shape (H, W, 3) (an ``RGB`` layer) or (H, W) (one
 channel). Writes go to a temporary file in the same directory and are renamed into
-place, so a reader never sees a half-written file.
+place, so a reader never sees a half-written file; the file gets the mode a plain
+``open()`` would give it (0666 less the umask), like the harness's other outputs.
 """
 
 from __future__ import annotations
@@ -21,6 +22,13 @@ __all__ = ["ExrError", "read_exr", "write_exr"]
 
 class ExrError(HarnessError, ValueError):
     """An EXR file is missing, truncated, corrupt, or lacks a channel."""
+
+
+def _umask() -> int:
+    """The process's umask (read by setting and restoring it)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def write_exr(path: str | Path, layers: dict[str, np.ndarray]) -> None:
@@ -43,6 +51,10 @@ def write_exr(path: str | Path, layers: dict[str, np.ndarray]) -> None:
     os.close(fd)
     try:
         OpenEXR.File(header, channels).write(tmp)
+        # mkstemp creates 0600 (and OpenEXR keeps the mode of the file it writes
+        # into); give the file the mode a plain open() would have, like every
+        # other output.
+        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -3,13 +3,29 @@
 A result directory holds ``camera.exr``, ``receiver_irradiance.exr`` (receiver 0),
 ``receiver_irradiance_1.exr``, ... (further receivers), each with an ``RGB`` layer
 (mean) and a ``variance`` layer (variance of the mean over K seeds), and
-``result.json``: the metadata plus the SHA-256 of every EXR. The JSON is written
-last and atomically, so an entry whose JSON parses and whose files match their
-hashes is complete; anything else (truncated EXR, killed writer, garbage) is a
-miss and is re-rendered.
+``result.json``: the metadata, the SHA-256 and (H, W) of every EXR (``files``,
+``shapes``), and ``document_sha256``, the SHA-256 of the rest of the JSON itself
+(canonical form: keys sorted, no whitespace), so the manifest covers the JSON as
+well as the images.
 
-The key is the SHA-256 of the scene's fields (less its file path), the bytes of
-every mesh both renderers get, Mitsuba and Dr.Jit versions and variant, and
+Writing: everything goes into a fresh temporary folder beside the target
+(``.NAME.tmp-XXXXXXXX``), which is renamed into place in one step; an existing
+folder holding only result files (a cache entry being replaced) is swapped out
+whole, any other folder (``caustics reference -o DIR``) has the files moved in with
+``result.json`` last. A writer that raises removes its temporary folder; one that is
+killed leaves it behind, and the next write beside it removes temporary folders
+older than :data:`STALE_AFTER`.
+
+Reading checks the entry against its schema (:func:`read_result_dir`): the JSON
+parses, its digest matches, the known keys have their types (unknown extra keys
+are allowed), every EXR is present with its recorded SHA-256 and size. Anything
+else (truncated EXR, killed writer, garbage, a hand-edited JSON) is a miss:
+:func:`load_entry` says why, warns in one line, and the caller re-renders.
+
+The key is the SHA-256 of the scene's physics: its fields less its file path and
+its name and description (renaming a scene re-uses its reference), only the
+reference's own settings (:data:`REFERENCE_SETTINGS`), the bytes of every mesh
+both renderers get, Mitsuba and Dr.Jit versions and variant, and
 :data:`FORMAT_VERSION`. Two processes rendering the same key serialise on an
 exclusive ``fcntl`` lock on ``KEY.lock``; the second finds the first's entry.
 """
@@ -21,27 +37,48 @@ import dataclasses
 import fcntl
 import hashlib
 import json
+import math
 import os
+import re
+import shutil
+import tempfile
+import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from renderers.exr import ExrError, read_exr, write_exr
 from renderers.results import ReceiverMap, RenderResult
-from scenes.files import atomic_write_bytes
+from scenes.files import dumps_strict
 from scenes.geometry import build_geometry
 from scenes.model import Scene
 
-__all__ = ["FORMAT_VERSION", "cache_dir", "cache_key", "entry_lock", "load_entry",
-           "read_result_dir", "receiver_file_name", "write_result_dir"]
+__all__ = ["FORMAT_VERSION", "STALE_AFTER", "CacheEntryError", "InvalidCacheEntryWarning",
+           "cache_dir", "cache_key", "entry_lock", "load_entry", "read_result_dir",
+           "receiver_file_name", "write_result_dir"]
 
 #: Bump when the renderer's output or the directory format changes meaning.
 #: 2: receiver maps hold caustic irradiance only; 3: traced with caustic-only
 #: emission (every photon aimed at the caustic objects), stratified lanes and
 #: TEA-hashed PCG32 seeding (same expectation, new samples, less noise); 4: all-paths
-#: mode follows paths up to a 64-event safety cap (was 8) and records the cut flux
-FORMAT_VERSION = 4
+#: mode follows paths up to a 64-event safety cap (was 8) and records the cut flux;
+#: 5: the key leaves out the scene's name and description, result.json records each
+#: EXR's size and its own digest (``shapes``, ``document_sha256``)
+FORMAT_VERSION = 5
 RESULT_JSON = "result.json"
+#: Seconds after which a temporary folder left by a killed writer is removed.
+STALE_AFTER = 3600.0
+#: Fields of ``[scene]`` that name or describe the scene but do not change its light.
+NON_PHYSICAL = ("name", "description")
+
+
+class CacheEntryError(ExrError):
+    """A result directory or cache entry is incomplete or fails its schema."""
+
+
+class InvalidCacheEntryWarning(UserWarning):
+    """A cache entry was invalid (corrupt, incomplete, edited) and is re-rendered."""
 
 
 def cache_dir(override: str | Path | None = None) -> Path:
@@ -70,9 +107,15 @@ REFERENCE_SETTINGS = ("receiver_map", "photons", "spp", "seed", "seeds", "target
 
 
 def cache_key(scene: Scene, versions: dict[str, str]) -> str:
-    """Hex SHA-256 naming the reference of ``scene`` under these versions: the scene
-    (without its file path) with only :data:`REFERENCE_SETTINGS` of its settings."""
+    """Hex SHA-256 naming the reference of ``scene`` under these versions.
+
+    The scene's physics only: its fields without the file path and without
+    ``[scene]`` :data:`NON_PHYSICAL` (name, description), with only
+    :data:`REFERENCE_SETTINGS` of its settings, and the bytes of every mesh.
+    """
     fields = _jsonable(dataclasses.replace(scene, source=""))
+    for name in NON_PHYSICAL:
+        fields["info"].pop(name, None)
     fields["settings"] = {k: fields["settings"][k] for k in REFERENCE_SETTINGS}
     digest = hashlib.sha256()
     digest.update(json.dumps({"scene": fields, "versions": versions,
@@ -106,86 +149,311 @@ def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
+def _document_digest(document: dict) -> str:
+    """SHA-256 of the JSON document without its ``document_sha256`` key, in the
+    canonical form (keys sorted, no whitespace) that a parse and re-dump reproduce."""
+    rest = {k: v for k, v in document.items() if k != "document_sha256"}
+    text = json.dumps(rest, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+# ------------------------------------------------------------------------- writing
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _temp_prefix(name: str) -> str:
+    return f".{name}.tmp-"
+
+
+def _remove_stale_temporaries(parent: Path, *, now: float | None = None) -> None:
+    """Remove temporary folders (``.NAME.tmp-*``) in ``parent`` older than
+    :data:`STALE_AFTER`: what writers killed mid-write left behind. Younger ones
+    may belong to a writer still at work and are kept."""
+    now = time.time() if now is None else now
+    with contextlib.suppress(OSError):
+        for path in parent.glob(".*.tmp-*"):
+            with contextlib.suppress(OSError):
+                if path.is_dir() and now - path.stat().st_mtime > STALE_AFTER:
+                    shutil.rmtree(path, ignore_errors=True)
+
+
+#: Files a result directory may hold: the EXRs, the JSON, and the temporary files
+#: of their atomic writes (``.camera.exr.XXXX.exr``, ``.result.json.XXXX.tmp``).
+_RESULT_FILE = re.compile(r"\.?(camera|receiver_irradiance(_\d+)?)\.exr(\..+\.exr)?"
+                          r"|\.?result\.json(\..+\.tmp)?")
+
+
+def _only_result_files(directory: Path) -> bool:
+    """Whether ``directory`` holds nothing but result-directory files (a cache
+    entry), so replacing it whole loses nothing of anyone's."""
+    return all(_RESULT_FILE.fullmatch(p.name) and p.is_file() for p in directory.iterdir())
+
+
+def _move_into_place(staging: Path, directory: Path) -> None:
+    """Publish the finished ``staging`` folder as ``directory``.
+
+    Absent target: one rename. A target holding only result files: renamed aside,
+    the new folder renamed in, the old one removed. Any other folder (or a link to
+    one): the files are moved in one by one, ``result.json`` last (until it lands,
+    the old JSON's hashes no longer match the new EXRs, so a reader sees a miss,
+    never a mix).
+    """
+    try:
+        staging.rename(directory)
+        return
+    except OSError:
+        if not directory.is_dir():
+            raise
+    if not directory.is_symlink() and _only_result_files(directory):
+        old = Path(tempfile.mkdtemp(dir=directory.parent,
+                                    prefix=_temp_prefix(directory.name)))
+        directory.rename(old / directory.name)
+        staging.rename(directory)
+        shutil.rmtree(old, ignore_errors=True)
+        return
+    names = sorted(p.name for p in staging.iterdir())
+    for name in [n for n in names if n != RESULT_JSON] + [RESULT_JSON]:
+        os.replace(staging / name, directory / name)
+    staging.rmdir()
+
+
 def write_result_dir(directory: str | Path, result: RenderResult,
                      camera_variance: np.ndarray | None = None) -> dict:
-    """Write a result directory (EXRs first, then ``result.json``); return the JSON."""
+    """Write a result directory atomically; return the JSON document.
+
+    The EXRs and ``result.json`` are written into a temporary folder beside
+    ``directory`` and moved into place at the end (see the module docstring);
+    temporary folders left there by killed writers, older than
+    :data:`STALE_AFTER`, are removed first.
+    """
     directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    files = {}
-    cam_layers = {"RGB": result.camera}
-    if camera_variance is None:
-        camera_variance = result.metadata.get("camera_variance")
-    if camera_variance is not None:
-        cam_layers["variance"] = camera_variance
-    write_exr(directory / "camera.exr", cam_layers)
-    files["camera.exr"] = _sha256(directory / "camera.exr")
-    for i, rmap in enumerate(result.receivers):
-        name = receiver_file_name(i)
-        layers = {"RGB": rmap.irradiance}
-        if rmap.variance is not None:
-            layers["variance"] = rmap.variance
-        write_exr(directory / name, layers)
-        files[name] = _sha256(directory / name)
-    # Arrays (the camera variance) live in the EXRs, not the JSON.
-    document = {k: v for k, v in result.metadata.items() if not isinstance(v, np.ndarray)}
-    document.update({
-        "renderer": result.renderer,
-        "effects": list(result.effects),
-        "timings": result.timings,
-        "timer": result.timer,
-        "receiver_extent": [list(r.extent) for r in result.receivers],
-        "files": files,
-    })
-    atomic_write_bytes(directory / RESULT_JSON,
-                       json.dumps(document, indent=2, sort_keys=True).encode())
+    directory.parent.mkdir(parents=True, exist_ok=True)
+    _remove_stale_temporaries(directory.parent)
+    staging = Path(tempfile.mkdtemp(dir=directory.parent,
+                                    prefix=_temp_prefix(directory.name)))
+    try:
+        # mkdtemp creates 0700; give the folder the mode a plain mkdir would have.
+        os.chmod(staging, 0o777 & ~_umask())
+        files, shapes = {}, {}
+        cam_layers = {"RGB": result.camera}
+        if camera_variance is None:
+            camera_variance = result.metadata.get("camera_variance")
+        if camera_variance is not None:
+            cam_layers["variance"] = camera_variance
+        layers_of = {"camera.exr": cam_layers}
+        for i, rmap in enumerate(result.receivers):
+            layers = {"RGB": rmap.irradiance}
+            if rmap.variance is not None:
+                layers["variance"] = rmap.variance
+            layers_of[receiver_file_name(i)] = layers
+        for name, layers in layers_of.items():
+            write_exr(staging / name, layers)
+            files[name] = _sha256(staging / name)
+            shapes[name] = [int(n) for n in layers["RGB"].shape[:2]]
+        # Arrays (the camera variance) live in the EXRs, not the JSON.
+        document = {k: v for k, v in result.metadata.items() if not isinstance(v, np.ndarray)}
+        document.update({
+            "renderer": result.renderer,
+            "effects": list(result.effects),
+            "timings": result.timings,
+            "timer": result.timer,
+            "receiver_extent": [list(r.extent) for r in result.receivers],
+            "files": files,
+            "shapes": shapes,
+        })
+        # The digest is taken over the document as a reader will parse it (tuples
+        # become lists, keys strings), so the reader's re-dump reproduces it.
+        # Strict JSON: a non-finite number is written as null with its reason.
+        document = json.loads(dumps_strict(document, sort_keys=True))
+        document["document_sha256"] = _document_digest(document)
+        text = dumps_strict(document, indent=2, sort_keys=True).encode()
+        with open(staging / RESULT_JSON, "wb") as handle:
+            handle.write(text)
+            handle.flush()
+            os.fsync(handle.fileno())
+        _move_into_place(staging, directory)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
     return document
 
 
+# ------------------------------------------------------------------------- reading
+
+_SHA256 = re.compile(r"[0-9a-f]{64}")
+_EXR_NAME = re.compile(r"(camera|receiver_irradiance(_[1-9]\d*)?)\.exr")
+
+
+def _is_int(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _is_number_or_null(value) -> bool:
+    return value is None or _is_number(value)
+
+
+def _is_str_list(value) -> bool:
+    return isinstance(value, list) and all(isinstance(v, str) for v in value)
+
+
+def _is_timings(value) -> bool:
+    return isinstance(value, dict) and all(_is_number_or_null(v) for v in value.values())
+
+
+#: Keys every result.json has, and the test each value passes.
+_REQUIRED = {
+    "renderer": lambda v: isinstance(v, str),
+    "effects": _is_str_list,
+    "timings": _is_timings,
+    "timer": lambda v: isinstance(v, str),
+    "receiver_extent": lambda v: isinstance(v, list) and len(v) >= 1,
+    "files": lambda v: isinstance(v, dict),
+    "shapes": lambda v: isinstance(v, dict),
+    "document_sha256": lambda v: isinstance(v, str),
+}
+#: Keys the reference writes and its readers use, checked when present; any other
+#: key is allowed and passed through as metadata.
+_OPTIONAL = {
+    "hash": lambda v: isinstance(v, str),
+    "variant": lambda v: isinstance(v, str),
+    "versions": lambda v: isinstance(v, dict),
+    "photons": _is_int,
+    "photon_budget": _is_int,
+    "channel_passes": _is_int,
+    "spp": _is_int,
+    "seed": _is_int,
+    "seeds": _is_int,
+    "relative_noise": _is_number_or_null,
+    "target_noise": _is_number_or_null,
+    "stopped_by": lambda v: isinstance(v, str),
+    "noise_history": lambda v: isinstance(v, list) and all(
+        isinstance(row, list) and len(row) == 3 and all(_is_number_or_null(x) for x in row)
+        for row in v),
+    "event_chains": _is_str_list,
+    "cut_flux_fraction": _is_number_or_null,
+    "max_specular_events": _is_int,
+    "camera_max_depth": _is_int,
+    "camera_integrator": lambda v: isinstance(v, str),
+    "camera_limits": _is_str_list,
+    "scene": lambda v: isinstance(v, str),
+}
+
+
+def _check_document(document, path: Path) -> None:
+    """Raise :class:`CacheEntryError` unless ``document`` fits the schema."""
+    def bad(message: str) -> CacheEntryError:
+        return CacheEntryError(f"{path}: {message}")
+
+    if not isinstance(document, dict):
+        raise bad(f"not a JSON object but {type(document).__name__}")
+    for key, test in _REQUIRED.items():
+        if key not in document:
+            raise bad(f"no {key!r}")
+        if not test(document[key]):
+            raise bad(f"{key!r} has the wrong type or shape")
+    for key, test in _OPTIONAL.items():
+        if key in document and not test(document[key]):
+            raise bad(f"{key!r} has the wrong type or shape")
+    if document["document_sha256"] != _document_digest(document):
+        raise bad("content does not match its recorded SHA-256 (edited or corrupt)")
+    for i, extent in enumerate(document["receiver_extent"]):
+        if not (isinstance(extent, list) and len(extent) == 4
+                and all(_is_number(x) and math.isfinite(x) for x in extent)
+                and extent[0] < extent[1] and extent[2] < extent[3]):
+            raise bad(f"receiver_extent[{i}] is not (umin < umax, vmin < vmax)")
+    expected = {"camera.exr"} | {receiver_file_name(i)
+                                 for i in range(len(document["receiver_extent"]))}
+    files, shapes = document["files"], document["shapes"]
+    if set(files) != expected or set(shapes) != expected:
+        raise bad(f"files and shapes must list exactly {sorted(expected)}")
+    for name in sorted(expected):
+        if not (isinstance(files[name], str) and _SHA256.fullmatch(files[name])):
+            raise bad(f"files[{name!r}] is not a SHA-256")
+        shape = shapes[name]
+        if not (isinstance(shape, list) and len(shape) == 2
+                and all(_is_int(n) and n >= 1 for n in shape)):
+            raise bad(f"shapes[{name!r}] is not [height, width]")
+
+
+def _check_layers(layers: dict, shape: list[int], path: Path) -> None:
+    """The EXR holds an (H, W, 3) ``RGB`` layer and, if any, a same-sized variance."""
+    want = (*shape, 3)
+    for name in ("RGB", "variance"):
+        if name == "RGB" and name not in layers:
+            raise CacheEntryError(f"{path}: no RGB layer")
+        if name in layers and layers[name].shape != want:
+            raise CacheEntryError(f"{path}: layer {name} is {layers[name].shape}, "
+                                  f"expected {want}")
+
+
 def read_result_dir(directory: str | Path) -> RenderResult:
-    """Read and verify a result directory.
+    """Read and verify a result directory against its schema.
 
     Raises
     ------
     ExrError
-        Missing or unparsable ``result.json``, a file whose SHA-256 differs from
-        the recorded one (truncated, replaced), or an unreadable EXR.
+        (:class:`CacheEntryError` for the directory's own checks) missing,
+        unparsable or mistyped ``result.json``, JSON content that does not match
+        its ``document_sha256``, a file missing or not matching its recorded
+        SHA-256 or size, or an unreadable EXR.
     """
     directory = Path(directory)
+    path = directory / RESULT_JSON
     try:
-        document = json.loads((directory / RESULT_JSON).read_text())
-        files = document["files"]
-        extents = document["receiver_extent"]
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        raise ExrError(f"{directory / RESULT_JSON}: unreadable ({error})") from None
-    for name, digest in files.items():
-        path = directory / name
-        if not path.is_file() or _sha256(path) != digest:
-            raise ExrError(f"{path}: missing or does not match its recorded SHA-256")
-    camera = read_exr(directory / "camera.exr")
+        document = json.loads(path.read_text())
+    except (OSError, ValueError) as error:
+        raise CacheEntryError(f"{path}: unreadable ({error})") from None
+    _check_document(document, path)
+    layers_of = {}
+    for name, digest in document["files"].items():
+        exr = directory / name
+        if not exr.is_file() or _sha256(exr) != digest:
+            raise CacheEntryError(f"{exr}: missing or does not match its recorded SHA-256")
+        layers_of[name] = read_exr(exr)
+        _check_layers(layers_of[name], document["shapes"][name], exr)
+    camera = layers_of["camera.exr"]
     receivers = []
-    for i, extent in enumerate(extents):
-        layers = read_exr(directory / receiver_file_name(i))
+    for i, extent in enumerate(document["receiver_extent"]):
+        layers = layers_of[receiver_file_name(i)]
         receivers.append(ReceiverMap(layers["RGB"], tuple(extent), layers.get("variance")))
     metadata = {k: v for k, v in document.items()
                 if k not in ("renderer", "effects", "timings", "timer")}
     metadata["camera_variance"] = camera.get("variance")
     return RenderResult(
-        renderer=document.get("renderer", "mitsuba"), camera=camera["RGB"],
-        receivers=tuple(receivers), effects=tuple(document.get("effects", ())),
-        timings=document.get("timings", {}), timer=document.get("timer", ""),
+        renderer=document["renderer"], camera=camera["RGB"],
+        receivers=tuple(receivers), effects=tuple(document["effects"]),
+        timings=document["timings"], timer=document["timer"],
         metadata=metadata,
     )
 
 
 def load_entry(root: Path, key: str) -> tuple[RenderResult | None, str]:
-    """The cached result for ``key`` and ``"hit"``, or None and why it missed."""
+    """The cached result for ``key`` and ``"hit"``, or None and why it missed.
+
+    A missing entry is ``"absent"``; an entry that fails :func:`read_result_dir` or
+    was stored under another key is ``"invalid: ..."`` and also warns
+    (:class:`InvalidCacheEntryWarning`, one line), since the caller re-renders it
+    and the new entry replaces it.
+    """
     directory = root / key
     if not directory.exists():
         return None, "absent"
     try:
         result = read_result_dir(directory)
+        if result.metadata.get("hash") != key:
+            raise CacheEntryError(f"{directory}: stored under another key")
     except ExrError as error:
-        return None, f"invalid: {error}"
-    if result.metadata.get("hash") != key:
-        return None, "invalid: key mismatch"
+        reason = " ".join(str(error).split())  # one line, whatever the error held
+        warnings.warn(f"invalid cached reference, re-rendering: {reason}",
+                      InvalidCacheEntryWarning, stacklevel=2)
+        return None, f"invalid: {reason}"
     return result, "hit"

@@ -39,6 +39,7 @@ most of the kernel's time, are much faster.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -105,13 +106,40 @@ def _pick(dr, index, values, cls):
 
 
 def spot_falloff(dr, mi, light: SpotLight, cos_theta):
-    """Mitsuba's spot profile: 1 inside beam_width, linear in angle to the cutoff."""
-    cutoff = np.radians(light.cutoff_angle)
-    beam = np.radians(light.beam_width if light.beam_width is not None else light.cutoff_angle)
+    """Relative intensity of the spot light at angle theta from its axis.
+
+    Mitsuba 3's ``spot`` emitter (``falloff_curve`` in ``src/emitters/spot.cpp``),
+    with theta_b the beam width and theta_c the cutoff (radians)::
+
+        f(theta) = 1                                         theta <= theta_b
+                 = (theta_c - theta) / (theta_c - theta_b)   theta_b < theta < theta_c
+                 = 0                                         theta >= theta_c
+
+    i.e. linear in the angle, continuous, from 1 at the beam width to 0 at the
+    cutoff. Without ``beam_width`` the beam is the whole cone (a hard edge). The
+    caustics-mapping shaders evaluate the same curve (``light_falloff`` in
+    ``renderers/caustics_mapping/common.glsl``).
+
+    Parameters
+    ----------
+    cos_theta : mi.Float
+        Cosine of the angle between the emitted direction and the spot axis.
+
+    Returns
+    -------
+    mi.Float
+        f(theta), dimensionless in [0, 1].
+    """
+    # Python floats, not NumPy float64 scalars: float64 scalars would promote the
+    # Dr.Jit Float lanes to Float64, which dr.scatter_reduce cannot add into the
+    # float32 receiver maps.
+    cutoff = math.radians(float(light.cutoff_angle))
+    beam = math.radians(float(light.beam_width if light.beam_width is not None
+                              else light.cutoff_angle))
     angle = dr.acos(dr.clip(cos_theta, -1.0, 1.0))
     ramp = (cutoff - angle) / max(cutoff - beam, 1e-12)
     value = dr.select(angle <= beam, 1.0, ramp)
-    return dr.select(angle < cutoff, value, 0.0)
+    return mi.Float(dr.select(angle < cutoff, value, 0.0))
 
 
 def _morton_compact(v):

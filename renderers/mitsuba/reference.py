@@ -275,6 +275,8 @@ def render_reference(scene: Scene, *, cache: str | Path | None = None, use_cache
         result, why = load_entry(root, key)
         if result is not None:
             result.metadata["cache"] = "hit"
+            # The key is the physics, not the name: a renamed scene hits the entry.
+            result.metadata["scene"] = scene.name
             return result
         result = _render(scene, progress=progress, key=key, versions=versions)
         write_result_dir(root / key, result)
