@@ -5,25 +5,58 @@ one-line messages. It imports nothing heavy: each subcommand names its handler a
 ``"module:function"`` and the module is imported only when that subcommand runs, so
 ``caustics --help`` and ``caustics validate`` never load Mitsuba, Dr.Jit, moderngl,
 matplotlib or playwright.
+
+Exit codes (:data:`EXIT_CODES`): 0 done; 1 bad input or a failure the harness
+detected (a scene error, an unwritable ``-o``, a refused file, a scene whose
+comparison failed); 2 usage (argparse, an unknown study or figure); 3 a bound or
+cross-check missed with ``--fail-on-thresholds`` / ``--fail-on-disagreement``;
+70 internal error (a bug: any other exception; ``--debug`` or ``CAUSTICS_DEBUG=1``
+prints its traceback); 130 interrupted. Every error is one ``error: ...`` line on
+stderr, never a traceback unless asked for.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+import traceback
+import warnings
 
+from harness.terminal import error_line, plain, warn
+from harness.writable import check_output_dir
 from scenes import SceneError
 from scenes.errors import HarnessError
 
-__all__ = ["build_parser", "main"]
+__all__ = ["EXIT_CODES", "build_parser", "main"]
+
+#: Exit status of each outcome (the README's table).
+EXIT_CODES = {"ok": 0, "failure": 1, "usage": 2, "threshold": 3, "internal": 70,
+              "interrupted": 130}
+_DEBUG_HINT = "rerun with --debug (or CAUSTICS_DEBUG=1) for the traceback"
 
 _SCENES_HELP = "scene files or bundled scene names (default: glass_sphere)"
+_ESTIMATOR_HELP = ("intersection estimator (default: the preset's: paper modified, "
+                   "strong secant)")
+_ITERATIONS_HELP = "estimator iterations (default: the preset's: paper 3, strong 5)"
+_GRID_HELP = "refractive vertex grid resolution, G x G (default: the scene's, 128)"
 
 
-def _command(subparsers, name: str, handler: str, help_text: str) -> argparse.ArgumentParser:
-    parser = subparsers.add_parser(name, help=help_text)
-    parser.set_defaults(handler=handler)
+def _common() -> argparse.ArgumentParser:
+    """Options every subcommand takes (also accepted before the subcommand)."""
+    parser = argparse.ArgumentParser(add_help=False)
+    # SUPPRESS: a subcommand's default must not overwrite `caustics --debug CMD`.
+    parser.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                        help="print the traceback of an internal error")
+    return parser
+
+
+def _command(subparsers, name: str, handler: str, help_text: str, *,
+             output_dir: bool = False) -> argparse.ArgumentParser:
+    """A subcommand; ``output_dir``: its ``-o`` is a folder checked before the handler."""
+    parser = subparsers.add_parser(name, help=help_text, parents=[_common()])
+    parser.set_defaults(handler=handler, output_dir=output_dir)
     return parser
 
 
@@ -41,22 +74,25 @@ def _scene_commands(subparsers) -> None:
 
 def _render_commands(subparsers) -> None:
     p = _command(subparsers, "render", "harness.commands.render:render",
-                 "render a scene with caustics mapping (OpenGL): the method")
+                 "render a scene with caustics mapping (OpenGL): the method", output_dir=True)
     p.add_argument("scene", nargs="?", metavar="SCENE", help=_SCENES_HELP)
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
-    p.add_argument("--estimator", choices=("modified", "newton", "secant"))
+    p.add_argument("--estimator", choices=("modified", "newton", "secant"), help=_ESTIMATOR_HELP)
     p.add_argument("--safeguarded", action="store_true", help="safeguarded estimator")
-    p.add_argument("--iterations", type=int, metavar="N")
-    p.add_argument("--grid", type=int, metavar="G")
-    p.add_argument("--caustic-map", type=int, metavar="M", dest="caustic_map")
-    p.add_argument("--normalization", choices=("radiometric", "paper"))
+    p.add_argument("--iterations", type=int, metavar="N", help=_ITERATIONS_HELP)
+    p.add_argument("--grid", type=int, metavar="G", help=_GRID_HELP)
+    p.add_argument("--caustic-map", type=int, metavar="M", dest="caustic_map",
+                   help="caustic-map resolution per face, in texels (default: the scene's, 512)")
+    p.add_argument("--normalization", choices=("radiometric", "paper"),
+                   help="flux per grid texel: physical (radiometric, the default) or the "
+                   "paper's Eq. 6")
     p.add_argument("--preset", choices=("paper", "strong"),
                    help="caustics-mapping preset (default: the scene's, else paper)")
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="override any setting (repeatable)")
 
     p = _command(subparsers, "reference", "harness.commands.reference:reference",
-                 "render the Mitsuba ground truth (cached) into a directory")
+                 "render the Mitsuba ground truth (cached) into a directory", output_dir=True)
     p.add_argument("scene", nargs="?", metavar="SCENE", help=_SCENES_HELP)
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     p.add_argument("--photons", type=int, help="photon budget per seed")
@@ -72,7 +108,8 @@ def _render_commands(subparsers) -> None:
 
 def _compare_command(subparsers) -> None:
     p = _command(subparsers, "compare", "harness.commands.compare:compare",
-                 "render both ways, compare, write data files and an HTML report")
+                 "render both ways, compare, write data files and an HTML report",
+                 output_dir=True)
     p.add_argument("scenes", nargs="*", metavar="SCENE", help=_SCENES_HELP)
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     p.add_argument("--studies", metavar="LIST",
@@ -86,9 +123,9 @@ def _compare_command(subparsers) -> None:
     p.add_argument("--method", action="append", metavar="NAME",
                    help="a registered method (entry-point group caustics_harness.methods) "
                    "to compare (repeatable)")
-    p.add_argument("--estimator", choices=("modified", "newton", "secant"))
-    p.add_argument("--iterations", type=int)
-    p.add_argument("--grid", type=int)
+    p.add_argument("--estimator", choices=("modified", "newton", "secant"), help=_ESTIMATOR_HELP)
+    p.add_argument("--iterations", type=int, metavar="N", help=_ITERATIONS_HELP)
+    p.add_argument("--grid", type=int, metavar="G", help=_GRID_HELP)
     p.add_argument("--photons", type=int, help="reference photon budget per seed")
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="override any setting (repeatable)")
@@ -106,25 +143,28 @@ def _compare_command(subparsers) -> None:
                    "(full transport; needs the `crosscheck` extra)")
     p.add_argument("--crosscheck-photons", type=int, default=4_000_000, metavar="N",
                    help="photons per seed on each side of the cross-check (default %(default)s)")
-    p.add_argument("--cache-dir", help="reference cache root")
+    p.add_argument("--cache-dir", help="reference cache root (default $CAUSTICS_CACHE_DIR or "
+                   "~/.cache/caustics-harness/reference)")
     p.add_argument("--no-cache", action="store_true", help="render references without the cache")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
 def _figures_command(subparsers) -> None:
     p = _command(subparsers, "figures", "harness.commands.figures:figures",
-                 "regenerate the paper's figures with their data")
+                 "regenerate the paper's figures with their data", output_dir=True)
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     p.add_argument("--only", metavar="LIST", help="comma-separated figure names (fig06,...)")
     p.add_argument("--quick", action="store_true", help="small budgets and images")
     p.add_argument("--scenes", metavar="DIR", help="scenes folder (default: the bundled scenes)")
-    p.add_argument("--cache-dir", help="reference cache root")
+    p.add_argument("--cache-dir", help="reference cache root (default $CAUSTICS_CACHE_DIR or "
+                   "~/.cache/caustics-harness/reference)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
 def _crosscheck_command(subparsers) -> None:
     p = _command(subparsers, "crosscheck", "harness.commands.crosscheck:crosscheck",
-                 "check the reference against an independent renderer (full transport)")
+                 "check the reference against an independent renderer (full transport)",
+                 output_dir=True)
     p.add_argument("scenes", nargs="*", metavar="SCENE", help=_SCENES_HELP)
     p.add_argument("--with", dest="other", choices=("luxcore",), required=True,
                    help="the independent renderer (needs the `crosscheck` extra)")
@@ -158,7 +198,11 @@ def build_parser() -> argparse.ArgumentParser:
         prog="caustics",
         description="Ground-truth validation harness for real-time caustics "
         "(caustics mapping vs Mitsuba 3).",
+        epilog="exit status: 0 done, 1 bad input or failure, 2 usage, 3 a bound missed "
+        "(--fail-on-...), 70 internal error, 130 interrupted",
     )
+    parser.add_argument("--debug", action="store_true",
+                        help="print the traceback of an internal error (also CAUSTICS_DEBUG=1)")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for group in (_scene_commands, _render_commands, _compare_command, _figures_command,
                   _crosscheck_command, _check_commands):
@@ -171,21 +215,60 @@ def _handler(spec: str):
     return getattr(importlib.import_module(module), function)
 
 
+def _debugging(args: argparse.Namespace) -> bool:
+    return bool(getattr(args, "debug", False)) or os.environ.get(
+        "CAUSTICS_DEBUG", "").strip() not in ("", "0")
+
+
+def _one_line_warning(message, *_where) -> None:
+    """warnings.showwarning for the CLI: ``warning: <message>`` on one line (the
+    library warnings, such as a cut-flux or an invalid cache entry, name their scene
+    or entry themselves; the source line Python would add means nothing to a user)."""
+    warn(message)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; return the exit status (0 ok, 1 bad input or failure, 130 interrupted)."""
+    """Run the CLI; return the exit status (:data:`EXIT_CODES`, the module docstring)."""
     args = build_parser().parse_args(argv)
+    debug = _debugging(args)
+    shown = warnings.showwarning
+    if not debug:
+        warnings.showwarning = _one_line_warning
     try:
+        return _run(args, debug=debug)
+    finally:
+        warnings.showwarning = shown
+
+
+def _run(args: argparse.Namespace, *, debug: bool) -> int:
+    try:
+        if args.output_dir:
+            check_output_dir(args.output)  # before any import or render: fail in seconds
         return int(_handler(args.handler)(args) or 0)
     except SceneError as error:
         for problem in error.problems:
-            print(f"error: {problem}", file=sys.stderr)
-        return 1
+            print(f"error: {plain(problem)}", file=sys.stderr)
+        return EXIT_CODES["failure"]
     except HarnessError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 1
+        # One line; a long report (a worker's output) follows only with --debug.
+        first, *rest = str(error).splitlines() or [""]
+        print(f"error: {plain(first)}" + (f" ({len(rest)} more lines: --debug shows them)"
+                                          if rest and not debug else ""), file=sys.stderr)
+        for line in rest if debug else ():
+            print(f"  {plain(line)}", file=sys.stderr)
+        return EXIT_CODES["failure"]
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
-        return 130
+        return EXIT_CODES["interrupted"]
+    except Exception as error:
+        # The system refused (a full disk, a permission): the user's to fix, so 1;
+        # anything else is a bug in the harness: 70, traceback on request.
+        if debug:
+            traceback.print_exc()
+        code = EXIT_CODES["failure" if isinstance(error, OSError) else "internal"]
+        hint = "" if debug else f" ({_DEBUG_HINT})"
+        print(f"error: {error_line(error)}{hint}", file=sys.stderr)
+        return code
 
 
 def run() -> None:

@@ -19,12 +19,10 @@ from __future__ import annotations
 
 import base64
 import hashlib
-import json
 import math
 import re
 import unicodedata
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
 from pathlib import Path
@@ -35,12 +33,13 @@ import jinja2
 import numpy as np
 from markupsafe import Markup
 
-from reports import images, plots
-from reports.display import luminance, white_point
-from reports.records import METRIC_FORMULAS, SceneComparison, Table
+from reports import plots
+from reports.panels import Assets, hdr_script, thumbnails, view_panels, views
+from reports.records import METRIC_FORMULAS, SceneComparison, SceneFailure, Table
 from scenes.files import atomic_write_bytes, jsonable
 
-__all__ = ["DEFAULT_PREVIEW_SIZE", "KEY_METRICS", "build_report", "scene_folder"]
+__all__ = ["DEFAULT_PREVIEW_SIZE", "FLUX_RATIO_RANGE", "KEY_METRICS", "build_report",
+           "scene_folder", "write_index", "write_page"]
 
 #: Largest side (pixels) of a preview; larger images are box-filtered down by an
 #: integer factor, and the page says so.
@@ -55,8 +54,9 @@ KEY_METRICS = (
     ("camera", "object_masked", "flip"),
 )
 REGION_ORDER = ("full", "caustic", "object_masked")
-THUMBNAIL_SIZE = 128
-_VIEW = re.compile(r"^(camera|receiver\d+)$")
+#: A page shows its flux budget when the method's flux ratio (receiver 0, whole map)
+#: is outside this range, or not a number.
+FLUX_RATIO_RANGE = (0.5, 2.0)
 _RESERVED = {"index.html"}
 
 
@@ -128,102 +128,6 @@ def _script_hashes(*scripts: str) -> Markup:
         for s in scripts))
 
 
-@dataclass
-class _Assets:
-    """Where a page's binary assets go: files beside it, or data: URIs inside it."""
-
-    folder: Path
-    self_contained: bool
-    written: list[Path] = field(default_factory=list)
-
-    def add(self, name: str, data: bytes, *, mime: str = "image/png") -> str:
-        if self.self_contained:
-            return images.data_uri(data, mime=mime)
-        path = self.folder / name
-        atomic_write_bytes(path, data)
-        self.written.append(path)
-        return quote(name)
-
-
-def _views(comparison: SceneComparison) -> list[str]:
-    views = {key.split("/", 1)[0] for key in comparison.images}
-    bad = sorted(v for v in views if not _VIEW.match(v))
-    if bad:
-        raise ValueError(f"image keys must start with camera/ or receiver<i>/, got {bad}")
-    return sorted(views, key=lambda v: (v != "camera", len(v), v))
-
-
-def _per_view(value: Any, view: str) -> Any:
-    return value.get(view) if isinstance(value, dict) else value
-
-
-def _view_panels(comparison: SceneComparison, view: str, assets: _Assets,
-                 preview_size: int) -> dict[str, Any]:
-    """Encode one view's images; receiver maps are flipped so +v points up."""
-    flip = view != "camera"
-    raw = {key.split("/", 1)[1]: np.asarray(array) for key, array in comparison.images.items()
-           if key.split("/", 1)[0] == view}
-    shown = {}
-    factor = 1
-    for kind, array in raw.items():
-        shown[kind], factor = images.downsample(array[::-1] if flip else array,
-                                                max_size=preview_size)
-    method, reference = shown.get("method"), shown.get("reference")
-    white = _per_view(comparison.exposure.get("white"), view)
-    if white is None and reference is not None:
-        white = white_point(reference)
-    white = float(white) if white and white > 0 else 1.0
-    panel: dict[str, Any] = {
-        "view": view,
-        "title": "Camera image" if view == "camera"
-        else f"Receiver {view.removeprefix('receiver')} irradiance map",
-        "units": "W m⁻² sr⁻¹" if view == "camera" else "W/m²",
-        "white": white, "factor": factor, "hdr": None, "maps": [], "regions": None,
-        "size": None,
-        "shape": raw["method"].shape[:2] if "method" in raw else None,
-    }
-    if method is not None and reference is not None:
-        panel["hdr"] = {
-            layer: images.data_uri(images.encode_png(images.encode_rgbe_stack(array)))
-            for layer, array in (("method", method), ("reference", reference))
-        }
-        panel["size"] = method.shape[:2]
-    if "signed" in shown:
-        limit = _per_view(comparison.exposure.get("diff_range"), view)
-        if not limit or limit <= 0:
-            lum = np.abs(luminance(shown["signed"]))
-            limit = float(np.percentile(lum, 99)) or 1.0
-        panel["maps"].append(_map_panel(
-            assets, view, "signed", shown["signed"], vmin=-float(limit), vmax=float(limit),
-            title="Difference (method − reference)",
-            label="luminance of method − reference, " + panel["units"]))
-    if "ssim" in shown:
-        panel["maps"].append(_map_panel(assets, view, "ssim", shown["ssim"], vmin=0.0,
-                                        vmax=1.0, title="SSIM map",
-                                        label="SSIM (values below 0 shown as 0)"))
-    if "flip" in shown:
-        panel["maps"].append(_map_panel(assets, view, "flip", shown["flip"], vmin=0.0,
-                                        vmax=1.0, title="FLIP map", label="HDR-FLIP error"))
-    caustic, obj = shown.get("mask_caustic"), shown.get("mask_object")
-    if caustic is not None or obj is not None:
-        shape = (caustic if caustic is not None else obj).shape
-        png = images.mask_png(None if caustic is None else caustic >= 0.5,
-                              None if obj is None else obj >= 0.5, shape)
-        panel["regions"] = assets.add(f"{view}_regions.png", png)
-    return panel
-
-
-def _map_panel(assets: _Assets, view: str, kind: str, values: np.ndarray, *, vmin: float,
-               vmax: float, title: str, label: str) -> dict[str, Any]:
-    return {
-        "title": title, "label": label, "vmin": vmin, "vmax": vmax,
-        "src": assets.add(f"{view}_{kind}.png",
-                          images.false_colour_png(values, kind=kind, vmin=vmin, vmax=vmax)),
-        "bar": assets.add(f"colourbar_{kind}_{view}.png",
-                          images.colour_bar_png(kind=kind, vmin=vmin, vmax=vmax)),
-    }
-
-
 def _metric_tables(comparison: SceneComparison) -> list[dict[str, Any]]:
     by_view: dict[str, list] = {}
     order = list(METRIC_FORMULAS)
@@ -244,7 +148,7 @@ def _table(table: Table | None) -> dict[str, Any] | None:
     return {"columns": list(table.columns), "rows": [list(r) for r in table.rows]}
 
 
-def _plot_panels(comparison: SceneComparison, assets: _Assets) -> dict[str, str | None]:
+def _plot_panels(comparison: SceneComparison, assets: Assets) -> dict[str, str | None]:
     out: dict[str, str | None] = {"convergence": None, "cost": None}
     if comparison.convergence is not None and comparison.convergence.rows:
         svg = plots.figure_bytes(plots.convergence_figure(comparison.convergence))
@@ -276,22 +180,45 @@ def _thresholds_summary(comparison: SceneComparison) -> dict[str, int]:
             "total": len(comparison.thresholds)}
 
 
-def _hdr_script(panels: list[dict[str, Any]]) -> str:
-    lines = ["window.causticsHdr = window.causticsHdr || {};"]
-    for panel in panels:
-        if panel["hdr"] is not None:
-            lines.append(f"window.causticsHdr[{json.dumps(panel['view'])}] = "
-                         f"{json.dumps(panel['hdr'])};")
-    return "\n".join(lines) + "\n"
+def _flux_budget(comparison: SceneComparison | SceneFailure) -> dict[str, Any] | None:
+    """The flux-budget panel: shown for a failure that got that far, and for a
+    comparison whose flux ratio is far from 1 (:data:`FLUX_RATIO_RANGE`) or NaN."""
+    if comparison.flux_budget is None:
+        return None
+    ratio = None
+    if isinstance(comparison, SceneComparison):
+        try:
+            ratio = comparison.metric("receiver0", "full", "flux_ratio").value
+        except KeyError:
+            return None
+        low, high = FLUX_RATIO_RANGE
+        if ratio is not None and math.isfinite(ratio) and low <= ratio <= high:
+            return None
+    return {"table": _table(comparison.flux_budget), "ratio": ratio,
+            "finite": ratio is not None and math.isfinite(ratio), "range": FLUX_RATIO_RANGE}
+
+
+def _page_context(self_contained: bool, *scripts: str) -> dict[str, Any]:
+    """What every page template gets: static assets, inline or linked, and the CSP."""
+    context = {
+        "self_contained": self_contained,
+        "static": "../_static/",
+        "css": _static("report.css") if self_contained else "",
+        "js": _inline_script(_static("report.js")) if self_contained else "",
+    }
+    context["script_hashes"] = (_script_hashes(*scripts, context["js"])
+                                if self_contained else "")
+    return context
 
 
 def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: bool,
-                 preview_size: int) -> dict[str, Any]:
-    assets = _Assets(folder, self_contained)
+                 preview_size: int) -> None:
+    assets = Assets(folder, self_contained)
     folder.mkdir(parents=True, exist_ok=True)
-    panels = [_view_panels(comparison, view, assets, preview_size)
-              for view in _views(comparison)]
-    hdr_script = _hdr_script(panels)
+    panels = [view_panels(comparison, view, assets, preview_size)
+              for view in views(comparison)]
+    script = hdr_script(panels)
+    hdr_inline = _inline_script(script) if self_contained else ""
     context = {
         "c": comparison,
         "panels": panels,
@@ -300,55 +227,80 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
         "convergence": _table(comparison.convergence),
         "cost": _table(comparison.cost),
         "crosscheck": _table(comparison.crosscheck),
+        "flux_budget": _flux_budget(comparison),
         "plots": _plot_panels(comparison, assets),
         "files": _file_links(comparison, folder),
         "thresholds": _thresholds_summary(comparison),
         "provenance": jsonable(comparison.provenance),
         "settings": jsonable(comparison.settings),
         "stability": jsonable(comparison.stability),
-        "self_contained": self_contained,
-        "static": "../_static/",
-        "css": _static("report.css") if self_contained else "",
-        "js": _inline_script(_static("report.js")) if self_contained else "",
-        "hdr_inline": _inline_script(hdr_script) if self_contained else "",
+        "hdr_inline": hdr_inline,
         "preview_size": preview_size,
+        **_page_context(self_contained, hdr_inline),
     }
-    context["script_hashes"] = (_script_hashes(context["hdr_inline"], context["js"])
-                                if self_contained else "")
     if not self_contained:
-        atomic_write_bytes(folder / "hdr.js", hdr_script.encode("utf-8"))
+        atomic_write_bytes(folder / "hdr.js", script.encode("utf-8"))
     html = _environment().get_template("scene.html.j2").render(context)
     atomic_write_bytes(folder / "index.html", html.encode("utf-8"))
-    return panels[0] if panels else {}
 
 
-def _thumbnails(comparison: SceneComparison, folder: str, out_dir: Path,
-                self_contained: bool) -> dict[str, str]:
-    """Tone-mapped method and reference of the first view, at most THUMBNAIL_SIZE px."""
-    views = _views(comparison)
-    if not views:
-        return {}
-    view = views[0]
-    white = _per_view(comparison.exposure.get("white"), view)
-    out = {}
-    for layer in ("method", "reference"):
-        array = comparison.images.get(f"{view}/{layer}")
-        if array is None:
-            continue
-        array = np.asarray(array)[::-1] if view != "camera" else np.asarray(array)
-        small, _ = images.downsample(array, max_size=THUMBNAIL_SIZE)
-        if not white or white <= 0:
-            white = white_point(comparison.images.get(f"{view}/reference", array))
-        png = images.tonemapped_png(small, white=float(white))
-        if self_contained:
-            out[layer] = images.data_uri(png)
-        else:
-            atomic_write_bytes(out_dir / folder / f"thumbnail_{layer}.png", png)
-            out[layer] = f"{quote(folder)}/thumbnail_{layer}.png"
-    return out
+def _build_failure(failure: SceneFailure, folder: Path, *, self_contained: bool) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    html = _environment().get_template("failure.html.j2").render({
+        "f": failure, "flux_budget": _flux_budget(failure),
+        **_page_context(self_contained)})
+    atomic_write_bytes(folder / "index.html", html.encode("utf-8"))
 
 
-def build_report(out_dir: Path, comparisons: Sequence[SceneComparison], *,
+def write_page(out_dir: Path, item: SceneComparison | SceneFailure, *, folder: str,
+               self_contained: bool = False,
+               preview_size: int = DEFAULT_PREVIEW_SIZE) -> dict[str, Any]:
+    """Write one page, ``out_dir/folder/index.html``, and return its row of the index
+    (for :func:`write_index`).
+
+    A :class:`SceneComparison` gets the full page; a :class:`SceneFailure` a page
+    with its one-line error (and its flux budget, when known) and a failure row.
+    """
+    out_dir = Path(out_dir)
+    href = f"{quote(folder)}/index.html"
+    if isinstance(item, SceneFailure):
+        _build_failure(item, out_dir / folder, self_contained=self_contained)
+        return {"c": item, "failure": True, "folder": folder, "href": href}
+    _build_scene(item, out_dir / folder, self_contained=self_contained,
+                 preview_size=preview_size)
+    metrics = []
+    for view, region, metric in KEY_METRICS:
+        try:
+            metrics.append(item.metric(view, region, metric))
+        except KeyError:
+            metrics.append(None)
+    return {"c": item, "failure": False, "folder": folder, "href": href, "metrics": metrics,
+            "thresholds": _thresholds_summary(item),
+            "thumbnails": thumbnails(item, folder, out_dir, self_contained)}
+
+
+def write_index(out_dir: Path, rows: Sequence[dict[str, Any]], *,
+                self_contained: bool = False) -> Path:
+    """Write ``out_dir/index.html`` (one row per page, :func:`write_page`) and, unless
+    ``self_contained``, the shared ``_static`` files; returns the index's path."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if not self_contained:
+        for name in ("report.css", "report.js"):
+            atomic_write_bytes(out_dir / "_static" / name, _static(name).encode("utf-8"))
+    html = _environment().get_template("index.html.j2").render({
+        "rows": rows, "key_metrics": KEY_METRICS, "formulas": METRIC_FORMULAS,
+        "failed": sum(1 for r in rows if r["failure"]),
+        "self_contained": self_contained, "static": "_static/",
+        "css": _static("report.css") if self_contained else "",
+        "script_hashes": "",
+    })
+    index = out_dir / "index.html"
+    atomic_write_bytes(index, html.encode("utf-8"))
+    return index
+
+
+def build_report(out_dir: Path, comparisons: Sequence[SceneComparison | SceneFailure], *,
                  self_contained: bool = False,
                  preview_size: int = DEFAULT_PREVIEW_SIZE) -> Path:
     """Write the HTML report of ``comparisons`` under ``out_dir``.
@@ -358,9 +310,9 @@ def build_report(out_dir: Path, comparisons: Sequence[SceneComparison], *,
     out_dir : Path
         Output folder (created). EXR originals named in ``SceneComparison.files``
         are expected in ``out_dir / scene_folder(name)`` and linked relatively.
-    comparisons : sequence of SceneComparison
+    comparisons : sequence of SceneComparison or SceneFailure
         One per scene and method, in the order of the summary table (each scene's
-        methods next to each other).
+        methods next to each other); a failure gets its row and its page too.
     self_contained : bool
         Embed images, plots, JavaScript and CSS in each HTML file (one file per
         page, nothing else written); the EXR links stay relative.
@@ -373,34 +325,10 @@ def build_report(out_dir: Path, comparisons: Sequence[SceneComparison], *,
     Path
         ``out_dir / "index.html"``.
     """
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    if not self_contained:
-        for name in ("report.css", "report.js"):
-            atomic_write_bytes(out_dir / "_static" / name, _static(name).encode("utf-8"))
     rows, taken = [], []
     for comparison in comparisons:
         folder = scene_folder(comparison.page, taken=taken)
         taken.append(folder)
-        _build_scene(comparison, out_dir / folder, self_contained=self_contained,
-                     preview_size=preview_size)
-        metrics = []
-        for view, region, metric in KEY_METRICS:
-            try:
-                metrics.append(comparison.metric(view, region, metric))
-            except KeyError:
-                metrics.append(None)
-        rows.append({
-            "c": comparison, "folder": folder, "href": f"{quote(folder)}/index.html",
-            "metrics": metrics, "thresholds": _thresholds_summary(comparison),
-            "thumbnails": _thumbnails(comparison, folder, out_dir, self_contained),
-        })
-    html = _environment().get_template("index.html.j2").render({
-        "rows": rows, "key_metrics": KEY_METRICS, "formulas": METRIC_FORMULAS,
-        "self_contained": self_contained, "static": "_static/",
-        "css": _static("report.css") if self_contained else "",
-        "script_hashes": "",
-    })
-    index = out_dir / "index.html"
-    atomic_write_bytes(index, html.encode("utf-8"))
-    return index
+        rows.append(write_page(out_dir, comparison, folder=folder,
+                               self_contained=self_contained, preview_size=preview_size))
+    return write_index(out_dir, rows, self_contained=self_contained)

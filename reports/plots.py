@@ -4,6 +4,10 @@ Each plot is returned as SVG bytes (for HTML) and can also be written as PDF (fo
 papers) with :func:`figure_bytes`. Text stays text in the SVG (``svg.fonttype =
 none``) and ids are salted deterministically, so the files are small and a rebuild
 gives the same bytes.
+
+Log axes see only finite, positive values. A panel with none (a scene without a
+caustic has no relMSE; an empty table has nothing) says so in words instead of
+plotting: matplotlib cannot place a log axis without data.
 """
 
 from __future__ import annotations
@@ -46,6 +50,25 @@ def _float(values: Sequence) -> np.ndarray:
     return np.array([np.nan if v is None else float(v) for v in values], float)
 
 
+def _loggable(values: np.ndarray) -> np.ndarray:
+    """``values`` with anything a log axis cannot show (≤ 0, NaN, ±inf) as NaN,
+    which matplotlib leaves out."""
+    return np.where(np.isfinite(values) & (values > 0), values, np.nan)
+
+
+def _positive(*values: float) -> bool:
+    """Every value finite and positive (a point a log-log plot can show)."""
+    return all(np.isfinite(v) and v > 0 for v in values)
+
+
+def _no_data(ax, text: str) -> None:
+    """Say in the panel why it is empty (no ticks: there is no scale to read)."""
+    ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes,
+            color="0.35", wrap=True)
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
 def estimator_label(estimator: str, safeguarded) -> str:
     """``newton`` or ``newton (safeguarded)``."""
     return f"{estimator} (safeguarded)" if safeguarded in (True, 1, "true", "True") else estimator
@@ -66,25 +89,30 @@ def convergence_figure(table: Table):
     guarded = (table.column("safeguarded") if "safeguarded" in table.columns
                else [False] * len(estimators))
     labels = [estimator_label(e, s) for e, s in zip(estimators, guarded, strict=True)]
-    names = list(dict.fromkeys(labels))
+    names = list(dict.fromkeys(labels)) or ["no estimator"]
     columns = 3 if len(names) > 4 else max(1, len(names))
     rows = -(-len(names) // columns)
+    error_columns = [c for c in ("mean_error_texels", "p95_error_texels", "max_error_texels")
+                     if c in table.columns]
+    errors = {c: _loggable(_float(table.column(c))) for c in error_columns}
+    # Panels share one log axis; it needs at least one finite, positive error.
+    any_data = any(np.isfinite(v).any() for v in errors.values())
     with plt.rc_context(_RC):
         figure, axes = plt.subplots(rows, columns, figsize=(3.0 * columns, 2.3 * rows),
                                     sharex=True, sharey=True, squeeze=False)
         iterations = _float(table.column("iteration"))
         for ax, name in zip(axes.flat, names, strict=False):
-            pick = np.array([label == name for label in labels])
+            pick = np.array([label == name for label in labels], dtype=bool)
             order = np.argsort(iterations[pick])
             x = iterations[pick][order]
-            for column, style in (("mean_error_texels", "-o"), ("p95_error_texels", "--s"),
-                                  ("max_error_texels", ":^")):
-                if column in table.columns:
-                    y = _float(table.column(column))[pick][order]
-                    y = np.where(y > 0, y, np.nan)  # log axis: zero error is off the plot
-                    ax.plot(x, y, style, markersize=3, label=column.split("_")[0])
-            ax.set_yscale("log")
+            ys = {c: errors[c][pick][order] for c in error_columns}
             ax.set_title(name)
+            if not any_data or not any(np.isfinite(y).any() for y in ys.values()):
+                _no_data(ax, "no finite hit-distance error")
+                continue
+            for column, style in zip(error_columns, ("-o", "--s", ":^"), strict=False):
+                ax.plot(x, ys[column], style, markersize=3, label=column.split("_")[0])
+            ax.set_yscale("log")
             ax.grid(True, which="both", alpha=0.3)
             if "converged" in table.columns:
                 twin = ax.twinx()
@@ -98,7 +126,8 @@ def convergence_figure(table: Table):
             ax.set_xlabel("iteration")
         for ax in axes[:, 0]:
             ax.set_ylabel("hit-distance error (texels)")
-        axes.flat[0].legend(fontsize=6, loc="upper right")
+        if axes.flat[0].get_legend_handles_labels()[0]:
+            axes.flat[0].legend(fontsize=6, loc="upper right")
         figure.suptitle("Estimator convergence (grey: fraction converged, right axis)")
     return figure
 
@@ -134,10 +163,14 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
     """
     plt = _pyplot()
     series = np.array(table.column("series"))
-    times = _float(table.column("time_s"))
-    errors = _float(table.column("relmse"))
+    times = _loggable(_float(table.column("time_s")))
+    errors = _loggable(_float(table.column("relmse")))
     with plt.rc_context(_RC):
         figure, ax = plt.subplots(figsize=(5.5, 3.8))
+        if not (np.isfinite(times) & np.isfinite(errors)).any():
+            ax.set_title("Cost versus accuracy")
+            _no_data(ax, "no caustic: no configuration has a finite, positive relMSE")
+            return figure
         cm = series == "caustics_mapping"
         ax.scatter(times[cm], errors[cm], s=10, color="tab:blue", alpha=0.6,
                    label="caustics mapping configurations")
@@ -152,10 +185,10 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
             ax.plot(times[ref], errors[ref], "-s", color="tab:red", markersize=4,
                     label="reference (Mitsuba) error vs time")
         title = "Cost versus accuracy"
-        if speedup is not None:
+        if speedup is not None and _positive(speedup.speedup, speedup.reference_time):
             method_time, method_error = _speedup_point(speedup, point, times[front], errors[front])
             title += f" — equal-error speedup {speedup.speedup:.4g}× ({speedup.kind})"
-            if np.isfinite(method_error):
+            if _positive(method_time, method_error):
                 ax.annotate("", xy=(speedup.reference_time, method_error),
                             xytext=(method_time, method_error),
                             arrowprops={"arrowstyle": "->", "color": "0.3"})

@@ -32,6 +32,7 @@ __all__ = [
     "EqualErrorSpeedup",
     "MetricValue",
     "SceneComparison",
+    "SceneFailure",
     "Table",
     "ThresholdCheck",
 ]
@@ -179,6 +180,10 @@ class SceneComparison:
     method, method_description : str
         The method compared (a caustics-mapping preset, ``paper`` or ``strong``, or a
         registered third-party method) and its one-line description.
+    flux_budget : Table or None
+        Where the light went (``harness.compare.budget``). Columns: item, flux_w,
+        fraction (of the traced flux); the report shows it when the flux ratio is
+        far from 1.
     """
 
     name: str
@@ -201,6 +206,7 @@ class SceneComparison:
     crosscheck: Table | None = None
     method: str = "paper"
     method_description: str = ""
+    flux_budget: Table | None = None
 
     @property
     def page(self) -> str:
@@ -213,3 +219,37 @@ class SceneComparison:
             if (m.view, m.region, m.metric) == (view, region, metric):
                 return m
         raise KeyError((view, region, metric))
+
+
+@dataclass(frozen=True)
+class SceneFailure:
+    """A scene and method whose comparison (or its files, or its page) failed: the
+    index gets a failure row and the page says why, while the other scenes go on.
+
+    Attributes
+    ----------
+    name, method, source : str
+        Scene name, method name and scene file (untrusted text: escape it).
+    error : str
+        One line: the exception's type and message.
+    stage : str
+        What was running: ``comparison``, ``data files`` or ``report page``.
+    description : str
+        The scene's description.
+    flux_budget : Table or None
+        Where the light went, when the comparison got that far (as in
+        :class:`SceneComparison`).
+    """
+
+    name: str
+    method: str
+    source: str
+    error: str
+    stage: str = "comparison"
+    description: str = ""
+    flux_budget: Table | None = None
+
+    @property
+    def page(self) -> str:
+        """The page's name, as :attr:`SceneComparison.page`."""
+        return f"{self.name}-{self.method}"

@@ -31,7 +31,7 @@ from renderers.mitsuba.reference import estimate_receivers
 from renderers.results import ReceiverMap
 from scenes import Scene, load_scene, with_settings
 from scenes.errors import HarnessError
-from scenes.files import atomic_write_bytes
+from scenes.files import atomic_write_bytes, dumps_strict
 
 __all__ = ["GOLDEN_SCENES", "GOLDEN_SETTINGS", "GoldenError", "golden_scene", "load_golden",
            "read_manifest", "regenerate"]
@@ -143,7 +143,7 @@ def regenerate(golden_dir: Path, scenes_dir: Path, *, names=GOLDEN_SCENES,
                     "overrides": GOLDEN_OVERRIDES, "scenes": scenes,
                     "created": time.strftime("%Y-%m-%d")}
         atomic_write_bytes(staging / "manifest.json",
-                           (json.dumps(manifest, indent=2) + "\n").encode("utf-8"))
+                           (dumps_strict(manifest, indent=2) + "\n").encode("utf-8"))
         os.chmod(staging, 0o755)
         old = golden_dir.with_name(golden_dir.name + ".old")
         if old.exists():

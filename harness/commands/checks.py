@@ -9,6 +9,7 @@ from harness.checks import GOLDEN_DIR, THRESHOLDS_FILE
 from harness.checks.accuracy import calibrate as calibrate_bounds
 from harness.checks.accuracy import write_thresholds
 from harness.checks.golden import GOLDEN_SCENES, load_golden, read_manifest, regenerate
+from harness.terminal import plain
 from scenes import SCENES_DIR
 
 __all__ = ["calibrate", "golden"]
@@ -22,7 +23,7 @@ def golden(args: argparse.Namespace) -> int:
     manifest = read_manifest(golden_dir)
     for name in manifest["scenes"]:
         golden = load_golden(golden_dir, name)  # checks every SHA-256
-        print(f"ok  {name}: {len(golden.receivers)} receiver map(s), "
+        print(f"ok  {plain(name)}: {len(golden.receivers)} receiver map(s), "
               f"{golden.entry['photons']} photons x {golden.entry['seeds']} seeds, "
               f"relative noise {golden.entry['relative_noise']:.4f}")
     return 0
@@ -35,5 +36,5 @@ def calibrate(args: argparse.Namespace) -> int:
     names = list(read_manifest(golden_dir)["scenes"])
     bounds = calibrate_bounds(SCENES_DIR, golden_dir, names, extra=args.extra)
     write_thresholds(output, bounds)
-    print(f"wrote {len(bounds)} bounds for {len(names)} scenes to {output}")
+    print(f"wrote {len(bounds)} bounds for {len(names)} scenes to {plain(output)}")
     return 0

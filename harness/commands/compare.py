@@ -1,4 +1,9 @@
-"""``caustics compare SCENE... -o DIR``: both renderers, every comparison, HTML report."""
+"""``caustics compare SCENE... -o DIR``: both renderers, every comparison, HTML report.
+
+Every output goes to a staging folder beside ``DIR`` and is swapped in at the end
+(:mod:`harness.compare.staging`); a scene that fails gets a failure row and page
+and the others go on (:mod:`harness.compare.isolation`); the exit status is then 1.
+"""
 
 from __future__ import annotations
 
@@ -17,12 +22,17 @@ from harness.checks.accuracy import golden_checks
 from harness.checks.thresholds import load_thresholds
 from harness.commands.crosscheck import run_crosscheck
 from harness.commands.scene import load_scenes
-from harness.compare.outputs import write_comparison
+from harness.compare.isolation import load_failure, run_scene, write_failure
 from harness.compare.pipeline import STUDIES, CompareOptions, compare_scene
+from harness.compare.staging import staged_output
+from harness.terminal import markup, plain
+from harness.writable import usable_cache
 from renderers.methods import load_method
-from reports import build_report, scene_folder
-from reports.plots import write_pdfs
-from scenes import SCENES_DIR, parse_override, with_settings
+from renderers.mitsuba.cache import cache_dir
+from reports import scene_folder
+from reports.build import write_index
+from reports.records import SceneFailure
+from scenes import SCENES_DIR, Scene, SceneError, default_scene_path, parse_override, with_settings
 
 __all__ = ["DEFAULT_METHODS", "compare", "summary_rows"]
 
@@ -31,9 +41,14 @@ DEFAULT_METHODS = ("paper", "strong")
 
 
 def summary_rows(comparisons) -> list[tuple[str, ...]]:
-    """One row per scene: the key numbers of the one-screen summary."""
+    """One row per scene: the key numbers of the one-screen summary (plain text: the
+    caller escapes it for Rich). A failed scene says ``FAILED`` and nothing else."""
     rows = []
     for c in comparisons:
+        if isinstance(c, SceneFailure):
+            rows.append((c.name, c.method, "FAILED", *("–",) * 6))
+            continue
+
         def value(metric, view="receiver0", region="caustic", c=c):
             try:
                 m = c.metric(view, region, metric)
@@ -55,29 +70,66 @@ def summary_rows(comparisons) -> list[tuple[str, ...]]:
 
 
 def _print_summary(comparisons, out_dir: Path, seconds: float) -> None:
-    table = Table(title=f"methods vs Mitsuba ({seconds:.0f} s) -> {out_dir}/index.html",
+    # Every cell may hold text from a scene file: escaped, or `[/]` is Rich markup.
+    table = Table(title=markup(f"methods vs Mitsuba ({seconds:.0f} s) -> {out_dir}/index.html"),
                   caption="receiver 0, caustic region; (noise floor: an independent "
                   "reference seed vs the reference)")
     for column in ("scene", "method", "relMSE", "SSIM", "FLIP", "flux ratio (full)", "frame ms",
                    "equal-error speedup", "bounds"):
         table.add_column(column)
     for row in summary_rows(comparisons):
-        table.add_row(*row)
+        table.add_row(*(markup(cell) for cell in row))
     # A pipe or a log gets a wide table rather than rich's 80-column default.
     console = Console()
     if not console.is_terminal:
         console = Console(width=160)
     console.print(table)
+    for c in comparisons:
+        # A scene that did not validate had its problems printed before the run.
+        if isinstance(c, SceneFailure) and c.stage != "validation":
+            print(f"error: {plain(c.page)} failed ({c.stage}): {c.error}", file=sys.stderr)
+
+
+def _load(paths: list[str], overrides: dict) -> list[tuple[str, Scene | SceneError]]:
+    """Each scene with its overrides, or the SceneError it raised (its problems are
+    printed now, one line each, before anything renders). Raises the SceneError when
+    no scene at all is valid: there is then no run to save."""
+    loaded = []
+    for path in paths or [str(default_scene_path())]:
+        try:
+            scene = load_scenes([path])[0]
+            loaded.append((path, with_settings(scene, overrides)))
+        except SceneError as error:
+            loaded.append((path, error))
+    errors = [scene for _, scene in loaded if isinstance(scene, SceneError)]
+    if len(errors) == len(loaded):
+        raise SceneError([p for error in errors for p in error.problems])
+    for error in errors:
+        for problem in error.problems:
+            print(f"error: {plain(problem)}", file=sys.stderr)
+    return loaded
+
+
+def _options(args: argparse.Namespace, studies: tuple[str, ...]) -> CompareOptions:
+    # An unwritable cache must not cost the run: render without it (one warning).
+    use_cache = not args.no_cache and usable_cache(cache_dir(args.cache_dir))
+    return CompareOptions(studies=studies, max_iterations=args.max_iterations,
+                          quick=args.quick, cache=args.cache_dir, use_cache=use_cache,
+                          progress=not args.quiet)
 
 
 def compare(args: argparse.Namespace) -> int:
-    """``caustics compare``: both renderers, every study, data files and the report."""
+    """``caustics compare``: both renderers, every study, data files and the report.
+
+    Returns 0; 1 when a scene failed (its row and page say why); 3 when a bound
+    failed and ``--fail-on-thresholds`` asks for it; 2 for an unknown study.
+    """
     start = time.perf_counter()
     overrides = dict(parse_override(item) for item in args.set or [])
     for name in ("estimator", "iterations", "grid", "photons"):
         if getattr(args, name) is not None:
             overrides[name] = getattr(args, name)
-    scenes = [with_settings(s, overrides) for s in load_scenes(args.scenes)]
+    scenes = _load(args.scenes, overrides)
     studies = tuple(s for s in (args.studies or ",".join(STUDIES)).split(",") if s)
     unknown = sorted(set(studies) - set(STUDIES))
     if unknown:
@@ -89,12 +141,9 @@ def compare(args: argparse.Namespace) -> int:
     thresholds_path = Path(args.thresholds) if args.thresholds else THRESHOLDS_FILE
     bounds = load_thresholds(thresholds_path)  # a missing file is an error, never "no bounds"
     golden_dir = Path(args.golden) if args.golden else GOLDEN_DIR
-    options = CompareOptions(studies=studies, max_iterations=args.max_iterations,
-                             quick=args.quick, cache=args.cache_dir,
-                             use_cache=not args.no_cache, progress=not args.quiet)
-    out_dir = Path(args.output)
-    comparisons, taken = [], []
-    for scene, method in ((scene, method) for scene in scenes for method in methods):
+    options = _options(args, studies)
+
+    def run(scene, method):
         comparison = compare_scene(scene, method=method, options=options)
         checks = None
         # The bounds are regression locks of the paper preset (calibrated from its
@@ -111,12 +160,27 @@ def compare(args: argparse.Namespace) -> int:
             comparison = dataclasses.replace(
                 comparison, crosscheck=cross.table(),
                 provenance={**comparison.provenance, "crosscheck": cross.provenance})
-        folder = scene_folder(comparison.page, taken=taken)
-        taken.append(folder)
-        write_comparison(out_dir / folder, comparison)
-        write_pdfs(out_dir / folder, comparison)
-        comparisons.append(comparison)
-    build_report(out_dir, comparisons, self_contained=args.self_contained)
-    _print_summary(comparisons, out_dir, time.perf_counter() - start)
-    failed = [t for c in comparisons for t in c.thresholds if not t.passed]
+        return comparison
+
+    items, rows, taken = [], [], []
+    with staged_output(args.output) as out_dir:
+        for (source, scene), method in ((pair, method) for pair in scenes for method in methods):
+            if isinstance(scene, SceneError):  # did not validate: its own row, no render
+                failure = load_failure(source, method.name, scene)
+                folder = scene_folder(failure.page, taken=taken)
+                item, row = failure, write_failure(out_dir, folder, failure,
+                                                   self_contained=args.self_contained)
+            else:
+                folder = scene_folder(f"{scene.name}-{method.name}", taken=taken)
+                item, row = run_scene(out_dir, folder, scene, method.name,
+                                      lambda s=scene, m=method: run(s, m),
+                                      self_contained=args.self_contained)
+            taken.append(folder)
+            items.append(item)
+            rows.append(row)
+        write_index(out_dir, rows, self_contained=args.self_contained)
+    _print_summary(items, Path(args.output), time.perf_counter() - start)
+    if any(isinstance(item, SceneFailure) for item in items):
+        return 1
+    failed = [t for c in items for t in c.thresholds if not t.passed]
     return 3 if failed and args.fail_on_thresholds else 0

@@ -11,9 +11,11 @@ from pathlib import Path
 from harness.commands.scene import load_scenes
 from harness.compare.outputs import write_json
 from harness.crosscheck import TOLERANCES, CrossCheck, compare_maps, full_transport
+from harness.terminal import plain
 from renderers.luxcore import check_supported, luxcore_version, render_receiver_caustic
 from renderers.mitsuba._mi import versions
 from renderers.mitsuba.reference import estimate_receivers
+from reports import scene_folder
 
 __all__ = ["crosscheck", "run_crosscheck"]
 
@@ -57,7 +59,7 @@ def run_crosscheck(scene, *, photons: int, seeds: int, other_photons: int) -> Cr
 
 def _print(check: CrossCheck) -> None:
     total = check.of_kind("total")[0]
-    print(f"{check.scene}: caustic flux reference / luxcore = {total.ratio:.4f} "
+    print(f"{plain(check.scene)}: caustic flux reference / luxcore = {total.ratio:.4f} "
           f"± {total.sigma:.4f} ({'agrees' if total.agrees else 'DISAGREES'}, "
           f"tolerance {TOLERANCES['total']:.1%})")
     for kind in ("encircled", "region"):
@@ -66,7 +68,7 @@ def _print(check: CrossCheck) -> None:
         if worst is not None:
             misses = sum(not r.agrees for r in rows)
             print(f"  {kind}: {len(rows)} compared, {misses} outside ±{TOLERANCES[kind]:.0%}; "
-                  f"worst {worst.label} ({worst.share:.1%} of the flux): "
+                  f"worst {plain(worst.label)} ({worst.share:.1%} of the flux): "
                   f"{worst.ratio:.4f} ± {worst.sigma:.4f} (z = {worst.z:+.1f})")
 
 
@@ -80,7 +82,8 @@ def crosscheck(args: argparse.Namespace) -> int:
         document = {"scene": check.scene, "with": check.renderer, "agrees": check.agrees,
                     "ratios": [{**dataclasses.asdict(r), "z": r.z} for r in check.ratios],
                     "provenance": check.provenance}
-        write_json(Path(args.output) / scene.name / "crosscheck.json", document)
+        # scene_folder: a scene name is untrusted text, never a path (no "/", no "..").
+        write_json(Path(args.output) / scene_folder(scene.name) / "crosscheck.json", document)
         _print(check)
         failed |= not check.agrees
     return 3 if failed and args.fail_on_disagreement else 0

@@ -7,25 +7,24 @@ row 0 of the EXR at vmin, as in :class:`renderers.results.ReceiverMap`),
 ``caustic_map.exr`` (the caustic-map atlas, W/m^2, top row = last texel row),
 ``hits.npz`` (per grid vertex: origin v, direction r, estimated d per iteration,
 status, ...) and ``result.json`` (receiver_extent, passes, lost_splats, timings,
-timer, metadata).
+timer, metadata; strict JSON, a non-finite number as null with its reason under
+``null_reasons``).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
 from harness.commands.scene import load_scenes
+from harness.terminal import plain
 from renderers.caustics_mapping.caustic_trace import STATUS
-from renderers.caustics_mapping.context import GLError
 from renderers.caustics_mapping.renderer import Frame, render_frame
 from renderers.exr import write_exr
 from scenes import parse_override, with_settings
-from scenes.files import atomic_write_bytes
+from scenes.files import atomic_write_bytes, dumps_strict
 
 __all__ = ["render", "write_outputs"]
 
@@ -58,7 +57,7 @@ def write_outputs(frame: Frame, directory: str | Path) -> list[Path]:
         "metadata": result.metadata,
     }
     paths.append(out / "result.json")
-    atomic_write_bytes(paths[-1], json.dumps(summary, indent=2).encode())
+    atomic_write_bytes(paths[-1], (dumps_strict(summary) + "\n").encode("utf-8"))
     return paths
 
 
@@ -75,16 +74,12 @@ def render(args: argparse.Namespace) -> int:
         overrides["safeguarded"] = True
     if overrides:
         scene = with_settings(scene, overrides)
-    try:
-        frame = render_frame(scene)
-    except GLError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 1
+    frame = render_frame(scene)  # a GLError is a HarnessError: the CLI makes it one line
     paths = write_outputs(frame, args.output)
     meta = frame.result.metadata
-    print(f"{scene.name}: passes {', '.join(meta['passes'])}; lost splats "
+    print(f"{plain(scene.name)}: passes {', '.join(meta['passes'])}; lost splats "
           f"{meta['lost_splats']}; total {sum(frame.result.timings.values()) * 1e3:.1f} ms "
           f"({frame.result.timer})")
     for path in paths:
-        print(f"  wrote {path}")
+        print(f"  wrote {plain(path)}")
     return 0

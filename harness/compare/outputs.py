@@ -8,22 +8,21 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from renderers.exr import write_exr
 from reports.records import METRIC_FORMULAS, SceneComparison, Table
-from scenes.files import atomic_write_bytes, jsonable
+from scenes.files import atomic_write_bytes, dumps_strict
 
 __all__ = ["comparison_json", "write_comparison", "write_json", "write_table"]
 
 
 def write_json(path: str | Path, data: Any) -> None:
-    """JSON with NaN as null and ±inf as strings (strict JSON), written atomically."""
-    text = json.dumps(jsonable(data), indent=2, allow_nan=False)
-    atomic_write_bytes(path, (text + "\n").encode("utf-8"))
+    """Strict JSON (:func:`scenes.files.dumps_strict`: a non-finite float is ``null``,
+    its reason under ``null_reasons``), written atomically."""
+    atomic_write_bytes(path, (dumps_strict(data) + "\n").encode("utf-8"))
 
 
 def write_table(path: str | Path, table: Table) -> None:
@@ -49,6 +48,7 @@ def comparison_json(comparison: SceneComparison) -> dict[str, Any]:
         "claims": comparison.claims,
         "thresholds": [asdict(t) for t in comparison.thresholds],
         "stability": comparison.stability,
+        "flux_budget": comparison.flux_budget.records() if comparison.flux_budget else None,
         "crosscheck": comparison.crosscheck.records() if comparison.crosscheck else None,
         "provenance": comparison.provenance,
         "files": comparison.files,

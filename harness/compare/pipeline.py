@@ -23,12 +23,14 @@ import numpy as np
 from tqdm import tqdm
 
 from harness.checks.stability import stability_summary
+from harness.compare.budget import flux_budget
 from harness.compare.evaluate import exposure_for, score_view
 from harness.compare.regions import caustic_region, object_mask
 from harness.studies.claims import check_five_iterations, check_one_iteration
 from harness.studies.convergence_study import convergence_study
 from harness.studies.cost_study import cost_study, sweep_size
 from harness.studies.runner import RealtimeRunner, frame_seconds
+from harness.terminal import plain
 from renderers.methods import Method, load_method
 from renderers.mitsuba.reference import render_reference
 from reports.display import luminance
@@ -107,7 +109,7 @@ def _progress_bar(total: int, enabled: bool, label: str):
     if not enabled:
         return None, (lambda: None)
 
-    bar = tqdm(total=total, desc=label, unit="render", leave=False)
+    bar = tqdm(total=total, desc=plain(label), unit="render", leave=False)
     return bar, (lambda: bar.update(1))
 
 
@@ -162,7 +164,10 @@ def _score_views(views: list[_View]):
         exposure["flip_start"][view.name] = expo.flip_start
         exposure["flip_stop"][view.name] = expo.flip_stop
         signed = np.abs(maps[f"{view.name}/signed"])
-        exposure["diff_range"][view.name] = float(np.percentile(signed, 99.5)) or 1.0
+        signed = signed[np.isfinite(signed)]
+        limit = float(np.percentile(signed, 99.5)) if signed.size else 0.0
+        # A colour bar needs a positive range: no difference (or none finite) gets 1.
+        exposure["diff_range"][view.name] = limit if limit > 0 else 1.0
         for kind in ("method", "reference", "signed", "ssim", "flip"):
             files[f"{view.name}/{kind}"] = f"{view.name}_{kind}.exr"
     return metrics, images, exposure, files
@@ -206,12 +211,14 @@ def _compare_other(scene: Scene, method: Method, options: CompareOptions) -> Sce
     }
     if camera_note:
         provenance["camera_note"] = camera_note
+    stability = stability_summary(scene, geometry, result, None)
     return SceneComparison(
         name=scene.name, description=scene.info.description, source=scene.source,
         effects=effects_of(scene), settings=asdict(scene.settings), metrics=tuple(metrics),
         images=images, exposure=exposure, provenance=provenance, files=files,
-        stability=stability_summary(scene, geometry, result, None),
-        method=method.name, method_description=method.description)
+        stability=stability, method=method.name, method_description=method.description,
+        flux_budget=flux_budget(result.metadata, stability, result.receivers,
+                                reference.receivers))
 
 
 def _reference_provenance(reference, independent) -> dict:
@@ -289,7 +296,9 @@ def compare_scene(scene: Scene, *, method: Method | None = None,
         images=images, exposure=exposure, convergence=convergence, cost=cost,
         speedup=speedup, claims=claims, provenance=provenance, files=files,
         stability=stability, speedup_point=speedup_point, method=method.name,
-        method_description=method.description)
+        method_description=method.description,
+        flux_budget=flux_budget(result.metadata, stability, result.receivers,
+                                reference.receivers))
 
 
 def _claims(convergence) -> dict[str, str]:
