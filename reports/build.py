@@ -36,6 +36,7 @@ from markupsafe import Markup
 from reports import plots
 from reports.panels import Assets, hdr_script, thumbnails, view_panels, views
 from reports.records import METRIC_FORMULAS, SceneComparison, SceneFailure, Table
+from scenes.effects import EFFECTS
 from scenes.files import atomic_write_bytes, jsonable
 
 __all__ = ["DEFAULT_PREVIEW_SIZE", "FLUX_RATIO_RANGE", "KEY_METRICS", "build_report",
@@ -107,6 +108,7 @@ def _environment() -> jinja2.Environment:
         lstrip_blocks=True,
     )
     env.filters["num"] = _number
+    env.globals["effect_notes"] = EFFECTS
     env.tests["mapping"] = lambda value: isinstance(value, dict)
     env.tests["sequence_value"] = lambda value: isinstance(value, (list, tuple))
     return env

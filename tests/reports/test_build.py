@@ -232,3 +232,16 @@ def test_crosscheck_section_shows_the_result_when_one_was_run(tmp_path, comparis
     assert "0.0703" in section and "4.73" in section and "4.84" in section
     plain = unescape((tmp_path / "glass_sphere-paper" / "index.html").read_text("utf-8"))
     assert "Not run (caustics compare --crosscheck luxcore" in re.sub(r"<[^>]+>", "", plain)
+
+
+def test_an_open_mesh_is_said_on_the_page(tmp_path, comparison):
+    """Regression lock (issue "Every failure is one clear line"): a scene with a
+    non-watertight mesh says on its page that it was rendered as an open surface;
+    a scene without one says nothing of the kind."""
+    build_report(tmp_path / "open", [replace(comparison, effects=(*comparison.effects,
+                                                                  "open_mesh"))])
+    build_report(tmp_path / "closed", [comparison])
+    open_page = next((tmp_path / "open").glob("*/index.html")).read_text()
+    closed_page = next((tmp_path / "closed").glob("*/index.html")).read_text()
+    assert 'id="open-mesh"' in open_page and "open surface" in open_page
+    assert 'id="open-mesh"' not in closed_page
