@@ -11,36 +11,15 @@ from __future__ import annotations
 
 import dataclasses
 
-#: A small valid scene (glass sphere over a floor, point light); 48 x 48 camera and
-#: small maps so that ``render`` cases take well under a second each.
-BASE = """\
-[scene]
-name = "corpus"
-description = "bad-input corpus base"
+from tests.conftest import MINIMAL_SCENE
 
-[light]
-type = "point"
-position = [1.0, -0.5, 6.0]
-intensity = [30.0, 30.0, 30.0]
-
-[[receivers]]
-type = "plane"
-center = [0.0, 0.0, 0.0]
-size = [8.0, 8.0]
-albedo = [0.5, 0.5, 0.5]
-
-[[objects]]
-type = "sphere"
-center = [0.0, 0.0, 2.0]
-radius = 1.0
-material = { type = "dielectric", ior = 1.5 }
-
-[camera]
-position = [0.0, -9.0, 7.0]
-look_at = [0.0, 0.0, 0.5]
-fov = 40.0
-resolution = [48, 48]
-
+#: The shared minimal scene (glass sphere over a floor, point light), named, with the
+#: light off-axis, a 48 x 48 camera and small maps so that ``render`` cases take well
+#: under a second each.
+BASE = MINIMAL_SCENE.lstrip().replace(
+    'name = "minimal"', 'name = "corpus"\ndescription = "bad-input corpus base"').replace(
+    "position = [0.0, 0.0, 6.0]", "position = [1.0, -0.5, 6.0]").replace(
+    "resolution = [64, 64]", "resolution = [48, 48]") + """
 [settings]
 grid = 16
 caustic_map = 64
@@ -48,7 +27,6 @@ positions_map = 64
 shadow_map = 64
 receiver_map = [32, 32]
 """
-
 LIGHT = 'type = "point"\nposition = [1.0, -0.5, 6.0]\nintensity = [30.0, 30.0, 30.0]'
 SPHERE = ('type = "sphere"\ncenter = [0.0, 0.0, 2.0]\nradius = 1.0\n'
           'material = { type = "dielectric", ior = 1.5 }')
@@ -109,6 +87,12 @@ def edit(*pairs: tuple[str, str], base: str = BASE) -> str:
         assert old in text, old
         text = text.replace(old, new, 1)
     return text
+
+
+def rendered(case_id: str, scene: str, *options: str, **kw) -> Case:
+    """A legal scene ``render`` must turn into a finite result (exit 0)."""
+    return Case(case_id, scene, argv=("render", "{scene}", "-o", "{out}", *options), exit=0,
+                finite=True, **kw)
 
 
 def bad(case_id: str, pairs, error: str, **kw) -> Case:
@@ -296,43 +280,28 @@ CLI_CASES = [
     Case("figures-unknown", None, argv=("figures", "-o", "{out}", "--only", "fig99"),
          exit=2, error=r"fig99"),
     # --- finite results from legal extremes
-    Case("render-base", BASE, argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-markup-name", edit(('name = "corpus"', 'name = "a[/]b"')),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-ior-near-one", edit((IOR, "ior = 1.0001")),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-huge-ior", edit((IOR, "ior = 4.0")),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-tiny-intensity", edit((INTENSITY, "intensity = [1e-30, 1e-30, 1e-30]")),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-large-intensity", edit((INTENSITY, "intensity = [1e20, 1e20, 1e20]")),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-grazing-light", edit((POSITION, "position = [30.0, 0.0, 2.5]")),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-light-below-floor", edit((POSITION, "position = [1.0, -0.5, -6.0]")),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-sphere-touching-floor", edit((CENTRE, "center = [0.0, 0.0, 1.0]")),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-tiny-sphere", edit((RADIUS, "radius = 1e-4")),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-grid-2", edit((GRID, "grid = 2")),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-zero-iterations", BASE, argv=("render", "{scene}", "-o", "{out}",
-                                               "--iterations", "0"), exit=0, finite=True),
-    Case("render-strong", BASE, argv=("render", "{scene}", "-o", "{out}", "--preset",
-                                      "strong"), exit=0, finite=True),
-    Case("render-open-mirror-bowl", edit((SPHERE, mesh_object(
+    rendered("render-base", BASE),
+    rendered("render-markup-name", edit(('name = "corpus"', 'name = "a[/]b"'))),
+    rendered("render-ior-near-one", edit((IOR, "ior = 1.0001"))),
+    rendered("render-huge-ior", edit((IOR, "ior = 4.0"))),
+    rendered("render-tiny-intensity", edit((INTENSITY, "intensity = [1e-30, 1e-30, 1e-30]"))),
+    rendered("render-large-intensity", edit((INTENSITY, "intensity = [1e20, 1e20, 1e20]"))),
+    rendered("render-grazing-light", edit((POSITION, "position = [30.0, 0.0, 2.5]"))),
+    rendered("render-light-below-floor", edit((POSITION, "position = [1.0, -0.5, -6.0]"))),
+    rendered("render-sphere-touching-floor", edit((CENTRE, "center = [0.0, 0.0, 1.0]"))),
+    rendered("render-tiny-sphere", edit((RADIUS, "radius = 1e-4"))),
+    rendered("render-grid-2", edit((GRID, "grid = 2"))),
+    rendered("render-zero-iterations", BASE, "--iterations", "0"),
+    rendered("render-strong", BASE, "--preset", "strong"),
+    rendered("render-open-mirror-bowl", edit((SPHERE, mesh_object(
         "bowl.obj", '{ type = "conductor", reflectance = [0.9, 0.9, 0.9] }'))),
-        argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True,
         files=(("bowl.obj", BOWL.encode()),)),
-    Case("render-spot", edit((LIGHT, 'type = "spot"\nposition = [0.0, 0.0, 6.0]\n'
-                              'direction = [0.0, 0.0, -1.0]\n' + INTENSITY
-                              + "\ncutoff_angle = 30.0\nbeam_width = 20.0")),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
-    Case("render-directional", edit((LIGHT, 'type = "directional"\n'
-                                     'direction = [0.1, 0.0, -1.0]\n'
-                                     'irradiance = [1.0, 1.0, 1.0]')),
-         argv=("render", "{scene}", "-o", "{out}"), exit=0, finite=True),
+    rendered("render-spot", edit((LIGHT, 'type = "spot"\nposition = [0.0, 0.0, 6.0]\n'
+                                  'direction = [0.0, 0.0, -1.0]\n' + INTENSITY
+                                  + "\ncutoff_angle = 30.0\nbeam_width = 20.0"))),
+    rendered("render-directional", edit((LIGHT, 'type = "directional"\n'
+                                         'direction = [0.1, 0.0, -1.0]\n'
+                                         'irradiance = [1.0, 1.0, 1.0]'))),
 ]
 
 CASES = SCENE_CASES + CLI_CASES

@@ -12,12 +12,14 @@ centre in float32, so the bounds are rounding (and the GL implementation's acos)
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
 from renderers.caustics_mapping import render_frame
 from scenes import parse_scene
+from tests.renderers import spot_profile
 
 POSITION = np.array([0.3, -0.2, 2.5])
 AXIS = np.array([-0.2, 0.1, -1.0])
@@ -66,19 +68,10 @@ receiver_map = [32, 32]
 """
 
 
-def falloff(theta_deg, cutoff=CUTOFF, beam=BEAM):
-    """Mitsuba's spot profile f(theta) (degrees in, dimensionless out)."""
-    theta = np.asarray(theta_deg, float)
-    if cutoff == beam:
-        return np.where(theta < cutoff, 1.0, 0.0)
-    return np.clip((cutoff - theta) / (cutoff - beam), 0.0, 1.0)
-
-
-def smoothstep_falloff(theta_deg):
-    """pbrt-v4's spot profile (smoothstep in cos theta): a plausible wrong answer."""
-    c0, c1 = math.cos(math.radians(CUTOFF)), math.cos(math.radians(BEAM))
-    t = np.clip((np.cos(np.radians(theta_deg)) - c0) / (c1 - c0), 0.0, 1.0)
-    return t * t * (3 - 2 * t)
+#: The profile of this module's spot (tests/renderers/spot_profile.py).
+falloff = functools.partial(spot_profile.falloff, cutoff=CUTOFF, beam=BEAM)
+smoothstep_falloff = functools.partial(spot_profile.smoothstep_falloff, cutoff=CUTOFF,
+                                       beam=BEAM)
 
 
 def _pixel_floor_points() -> np.ndarray:
@@ -128,5 +121,5 @@ def test_direct_light_under_a_spot_is_albedo_over_pi_i_falloff_cos_over_r2(ctx):
     assert beam_error < 1e-5
     assert profile_error < 1e-3
     assert np.all(image[beyond] == 0.0)
-    for wrong in (falloff(theta, CUTOFF, CUTOFF), smoothstep_falloff(theta)):
+    for wrong in (falloff(theta, cutoff=CUTOFF, beam=CUTOFF), smoothstep_falloff(theta)):
         assert np.abs(wrong - expected).max() > 0.05

@@ -27,7 +27,7 @@ somewhere with probability 180 x 5.7e-7 = 1e-4.
 
 from __future__ import annotations
 
-import math
+import functools
 
 import numpy as np
 import pytest
@@ -37,6 +37,7 @@ from renderers.mitsuba.emission import spot_falloff
 from renderers.mitsuba.exporter import emitter_dicts
 from renderers.mitsuba.reference import estimate_receivers
 from scenes.model import SpotLight
+from tests.renderers import spot_profile
 from tests.renderers.mitsuba.scenes import FAR_SPHERE, make_scene
 
 K = 8
@@ -49,19 +50,10 @@ INTENSITY = np.array([10.0, 20.0, 30.0])
 CUTOFF, BEAM = 40.0, 20.0
 
 
-def falloff(theta_deg, cutoff=CUTOFF, beam=BEAM):
-    """f(theta) of the module docstring (degrees in, dimensionless out)."""
-    theta = np.asarray(theta_deg, float)
-    if cutoff == beam:
-        return np.where(theta < cutoff, 1.0, 0.0)
-    return np.clip((cutoff - theta) / (cutoff - beam), 0.0, 1.0)
-
-
-def smoothstep_falloff(theta_deg):
-    """pbrt-v4's spot profile (smoothstep in cos theta): a plausible wrong answer."""
-    c0, c1 = math.cos(math.radians(CUTOFF)), math.cos(math.radians(BEAM))
-    t = np.clip((np.cos(np.radians(theta_deg)) - c0) / (c1 - c0), 0.0, 1.0)
-    return t * t * (3 - 2 * t)
+#: The profile of this module's spot (tests/renderers/spot_profile.py).
+falloff = functools.partial(spot_profile.falloff, cutoff=CUTOFF, beam=BEAM)
+smoothstep_falloff = functools.partial(spot_profile.smoothstep_falloff, cutoff=CUTOFF,
+                                       beam=BEAM)
 
 
 def _spot(**extra) -> SpotLight:
@@ -92,7 +84,7 @@ def test_falloff_is_mitsubas_spot_emitter(beam):
     _, spectrum = emitter.sample_direction(it, mi.Point2f(0.5, 0.5))
     mitsuba = np.asarray(spectrum).reshape(3, -1).T * distance**2 / np.asarray(light.intensity)
     ours = np.asarray(spot_falloff(dr, mi, light, mi.Float(np.cos(rad).astype(np.float32))))
-    expected = falloff(theta, CUTOFF, beam if beam is not None else CUTOFF)
+    expected = falloff(theta, cutoff=CUTOFF, beam=beam if beam is not None else CUTOFF)
     away = np.abs(theta - CUTOFF) > 1e-2  # float32 cannot place the cutoff exactly
     np.testing.assert_allclose(mitsuba[away], np.repeat(expected[away, None], 3, 1), atol=2e-5)
     np.testing.assert_allclose(ours[away], expected[away], atol=2e-5)
