@@ -100,9 +100,14 @@ def _render_commands(subparsers) -> None:
     p.add_argument("--seed", type=int, help="first random seed")
     p.add_argument("--seeds", type=int, help="number of independent seeds K")
     p.add_argument("--target-noise", type=float, help="stop at this relative noise")
-    p.add_argument("--cache-dir", help="cache root (default $CAUSTICS_CACHE_DIR or "
+    _cache_options(p)
+
+
+def _cache_options(p: argparse.ArgumentParser) -> None:
+    """The reference-cache and progress options of the commands that render it."""
+    p.add_argument("--cache-dir", help="reference cache root (default $CAUSTICS_CACHE_DIR or "
                    "~/.cache/caustics-harness/reference)")
-    p.add_argument("--no-cache", action="store_true", help="render without the cache")
+    p.add_argument("--no-cache", action="store_true", help="render references without the cache")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
@@ -143,10 +148,7 @@ def _compare_command(subparsers) -> None:
                    "(full transport; needs the `crosscheck` extra)")
     p.add_argument("--crosscheck-photons", type=int, default=4_000_000, metavar="N",
                    help="photons per seed on each side of the cross-check (default %(default)s)")
-    p.add_argument("--cache-dir", help="reference cache root (default $CAUSTICS_CACHE_DIR or "
-                   "~/.cache/caustics-harness/reference)")
-    p.add_argument("--no-cache", action="store_true", help="render references without the cache")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    _cache_options(p)
 
 
 def _figures_command(subparsers) -> None:

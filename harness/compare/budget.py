@@ -19,9 +19,11 @@ import numpy as np
 from renderers.results import ReceiverMap
 from reports.records import Table
 
-__all__ = ["BUDGET_COLUMNS", "flux_budget"]
+__all__ = ["BUDGET_COLUMNS", "METHOD_ROW", "REFERENCE_ROW", "flux_budget"]
 
 BUDGET_COLUMNS = ("item", "flux_w", "fraction")
+#: The budget rows of the caustic flux on the receivers (W), method and reference.
+METHOD_ROW, REFERENCE_ROW = "on the receivers: method maps", "on the receivers: reference"
 
 #: Status of the grid's vertices (``status_flux_fraction`` keys) and their labels.
 _STATUS_ROWS = (
@@ -77,8 +79,7 @@ def flux_budget(metadata: Mapping, stability: Mapping | None,
         if off is not None:
             rows.append(("  of the hits: off every receiver (exact ray)", watts(off), off))
     method_w, reference_w = _received(method_maps), _received(reference_maps)
-    for label, value in (("on the receivers: method maps", method_w),
-                         ("on the receivers: reference", reference_w)):
+    for label, value in ((METHOD_ROW, method_w), (REFERENCE_ROW, reference_w)):
         fraction = value / traced if traced else None
         rows.append((label, value, fraction))
     return Table(BUDGET_COLUMNS, tuple(rows))

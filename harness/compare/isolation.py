@@ -14,6 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from harness.compare.budget import REFERENCE_ROW
 from harness.compare.outputs import write_comparison, write_json
 from harness.terminal import error_line
 from reports.build import write_page
@@ -38,7 +39,7 @@ def _reference_caustic_watts(comparison: SceneComparison) -> float | None:
     if comparison.flux_budget is None:
         return None
     for row in comparison.flux_budget.records():
-        if row["item"] == "on the receivers: reference":
+        if row["item"] == REFERENCE_ROW:
             return row["flux_w"]
     return None
 
