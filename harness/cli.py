@@ -65,6 +65,10 @@ def _scene_commands(subparsers) -> None:
                  "check scene files and print the effects each calls for")
     p.add_argument("scenes", nargs="*", metavar="SCENE", help=_SCENES_HELP)
     p.add_argument("--json", action="store_true", help="print a JSON report")
+    p.add_argument("--no-trace", dest="trace", action="store_false",
+                   help="skip the caustic probe (a small photon trace with the reference "
+                        "tracer that finds scenes whose caustic misses every receiver); "
+                        "validate then loads no renderer")
     p = _command(subparsers, "describe", "harness.commands.scene:describe",
                  "summarise scenes: geometry, effects, settings")
     p.add_argument("scenes", nargs="*", metavar="SCENE", help=_SCENES_HELP)

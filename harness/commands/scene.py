@@ -1,7 +1,10 @@
 """Scene commands: ``validate``, ``describe`` and ``schema``.
 
-Imports nothing heavy: ``validate`` must run where Mitsuba, Dr.Jit and moderngl
-cannot even be imported.
+Imports nothing heavy: ``validate --no-trace``, ``describe`` and ``schema`` run where
+Mitsuba, Dr.Jit and moderngl cannot even be imported. Plain ``validate`` also traces
+a small photon probe with the reference tracer (:mod:`harness.compare.probe`,
+Mitsuba imported only then) so that it finds the scenes whose caustic misses every
+receiver, which ``compare`` fails on.
 """
 
 from __future__ import annotations
@@ -65,12 +68,34 @@ def _problem_dicts(problems: list[Problem]) -> list[dict[str, str]]:
     return [{"file": p.file, "path": p.path, "message": p.message} for p in problems]
 
 
+def _probe(scenes: list[Scene]) -> tuple[list[Scene], list[Problem], dict[str, float]]:
+    """Run the caustic probe on each scene: ``(scenes with a caustic, errors,
+    caustic flux (W) by scene source)``."""
+    from harness.compare.probe import no_caustic_problem, probe_caustic  # noqa: PLC0415 (Mitsuba)
+
+    kept, problems, flux = [], [], {}
+    for scene in scenes:
+        probe = probe_caustic(scene)
+        flux[scene.source] = probe.caustic_flux_w
+        problem = no_caustic_problem(scene, probe)
+        if problem:
+            problems.append(problem)
+        else:
+            kept.append(scene)
+    return kept, problems, flux
+
+
 def validate(args: argparse.Namespace) -> int:
     scenes, problems, warnings = check_scenes(args.scenes)
+    flux: dict[str, float] = {}
+    if args.trace and scenes:
+        scenes, probe_problems, flux = _probe(scenes)
+        problems += probe_problems
     if args.json:
         report = {
             "scenes": [
-                {"name": s.name, "path": s.source, "effects": list(effects_of(s))}
+                {"name": s.name, "path": s.source, "effects": list(effects_of(s)),
+                 "probe_caustic_flux_w": flux.get(s.source)}
                 for s in scenes
             ],
             "errors": _problem_dicts(problems),
@@ -79,8 +104,10 @@ def validate(args: argparse.Namespace) -> int:
         print(json.dumps(report, indent=2))
     else:
         for scene in scenes:
+            probed = (f"  caustic {flux[scene.source]:.3g} W (probe)"
+                      if scene.source in flux else "")
             print(plain(f"ok  {scene.source}  [{scene.name}]  effects: "
-                        f"{', '.join(effects_of(scene))}"))
+                        f"{', '.join(effects_of(scene))}{probed}"))
     for warning in warnings:
         print(plain(f"warning: {warning}"), file=sys.stderr)
     for problem in problems:

@@ -201,6 +201,17 @@ SCENE_CASES = [
         r"light\.size"),
     # --- geometry the renderers would fail on
     bad("light-inside-sphere", [(POSITION, "position = [0.0, 0.0, 2.0]")], r"light\.position"),
+    # --- no caustic reaches a receiver: validate's probe predicts compare's failure
+    bad("caustic-misses-receiver", [("center = [0.0, 0.0, 0.0]", "center = [6.0, 6.0, 0.0]"),
+                                    (SIZE, "size = [1.0, 1.0]")], r"receivers: no caustic"),
+    bad("no-specular-object", [('material = { type = "dielectric", ior = 1.5 }',
+                                'material = { type = "diffuse", albedo = [0.5, 0.5, 0.5] }')],
+        r"receivers: no caustic"),
+    bad("spot-aimed-away", [(LIGHT, 'type = "spot"\nposition = [0.0, 0.0, 6.0]\n'
+                             'direction = [0.0, 0.0, 1.0]\n' + INTENSITY
+                             + "\ncutoff_angle = 30.0")], r"receivers: no caustic"),
+    bad("light-below-receiver", [(POSITION, "position = [1.0, -0.5, -6.0]")],
+        r"receivers: no caustic"),
     # --- meshes
     bad("mesh-missing", [(SPHERE, mesh_object("nosuch.obj"))], r"objects\[0\]\.file"),
     bad("mesh-garbage", [(SPHERE, mesh_object("garbage.obj"))], r"objects\[0\]\.file",

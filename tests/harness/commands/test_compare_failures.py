@@ -65,7 +65,7 @@ def test_real_run_with_a_caustic_free_scene_and_a_failing_one(tmp_path, monkeypa
     plot used to end the run) gets a "no caustic" failure row and a page that shows
     the flux budget, its data files beside it; a scene whose comparison raises and a
     scene that does not validate (zero intensity) get failure rows; the good scene
-    completes; exit 1."""
+    completes; exit 1. ``validate`` predicts the no-caustic failure (its probe)."""
     real = command.compare_scene
 
     def compare(scene, *, method, options):
@@ -97,3 +97,7 @@ def test_real_run_with_a_caustic_free_scene_and_a_failing_one(tmp_path, monkeypa
     data = json.loads((out / "nocaustic-paper" / "metrics.json").read_text())
     assert data["null_reasons"] and data["flux_budget"][0]["fraction"] == 1.0
     assert "injected failure" in (out / "broken-paper" / "index.html").read_text()
+    # validate predicts compare: the scene whose caustic failed is its error too.
+    assert main(["validate", str(good), str(dark)]) == 1
+    (line,) = [x for x in capsys.readouterr().err.splitlines() if x.startswith("error:")]
+    assert line.startswith(f"error: {dark}: receivers: no caustic")
