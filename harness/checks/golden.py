@@ -1,15 +1,30 @@
-"""Golden references: small Mitsuba receiver maps committed with a manifest.
+"""Golden references: Mitsuba receiver maps at 128², with per-texel variance, committed
+with a SHA-256 manifest.
 
-The default test run compares the caustics-mapping renderer against these instead
-of re-rendering Mitsuba at high photon counts. Layout of the golden folder
-(bundled: ``harness/checks/data/golden/``)::
+They serve two checks (see :mod:`harness.checks`):
 
-    manifest.json            settings, versions, and per scene: photons, seeds,
-                             seed, relative noise, and the SHA-256 of every file
-    <scene>/receiver<i>.exr  RGB = mean caustic irradiance (W/m²), variance = the
-                             variance of that mean over the K seeds
+* the photon tracer is held to them with a per-pixel Z-test (:mod:`harness.checks.ztest`,
+  Mitsuba's render-test procedure): a fresh render on other seeds must agree texel
+  by texel within the noise both carry;
+* the regression locks of the caustics-mapping renderer are measured against them
+  (:mod:`harness.checks.locks`), so the default test run needs no large reference render.
 
-Every file is checked against its SHA-256 on load. ``regenerate`` renders into a
+Layout of the golden folder (bundled: ``harness/checks/data/golden/``)::
+
+    manifest.json            settings, versions, and per scene: photons per seed,
+                             seeds, first seed, relative noise, the scale of each map
+                             and the SHA-256 of every file
+    <scene>/receiver<i>.exr  half-float layers, both divided by the map's ``scale``:
+                             RGB   = mean caustic irradiance E (W/m²)
+                             sigma = standard error of that mean over the K seeds
+
+Half floats keep the eight maps at about 400 KB: the rounding error of a stored value
+is at most 2^-11 of it, and :func:`load_golden` adds its variance (ulp² / 12) to the
+stored one, so the Z-test counts it. Values are divided by the map's largest value
+before rounding, so nothing overflows and the dim texels keep ~1e-7 of the peak.
+
+Every file is checked against its SHA-256 on load; a missing or unreadable manifest or
+file is a :class:`GoldenError` that names the path. ``regenerate`` renders into a
 staging folder beside the golden one and swaps it in with renames, so a failed or
 interrupted run leaves the committed references untouched.
 """
@@ -25,7 +40,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from renderers.exr import read_exr, write_exr
+import numpy as np
+
+from renderers.exr import ExrError, read_exr
 from renderers.mitsuba._mi import versions
 from renderers.mitsuba.reference import estimate_receivers
 from renderers.results import ReceiverMap
@@ -33,19 +50,26 @@ from scenes import Scene, load_scene, with_settings
 from scenes.errors import HarnessError
 from scenes.files import atomic_write_bytes, dumps_strict
 
-__all__ = ["GOLDEN_SCENES", "GOLDEN_SETTINGS", "GoldenError", "golden_scene", "load_golden",
-           "read_manifest", "regenerate"]
+__all__ = ["FRESH_SEEDS", "GOLDEN_SCENES", "GOLDEN_SETTINGS", "Golden", "GoldenError",
+           "fresh_reference", "golden_scene", "load_golden", "read_manifest", "regenerate"]
 
-FORMAT = 1
+FORMAT = 2
 #: Paper scenes with golden references.
 GOLDEN_SCENES = ("glass_sphere", "bunny", "colored_bunny", "dispersion_sphere", "water_pool",
                  "seabed", "metal_ring")
-#: Settings of golden references and of the renders held against them: 64² maps, so
-#: 4 M photons x 4 seeds give about 0.5 % relative noise per caustic texel.
-GOLDEN_SETTINGS = {"receiver_map": [64, 64], "photons": 4_000_000, "seeds": 4, "seed": 1000}
-#: Per-scene budgets where 4 M photons leave too much noise: the seabed's rock
-#: receiver is small, so its texels catch few photons (7.6 % noise at 4 M).
+#: Settings of golden references and of the renders held against them: 128² maps,
+#: 16 seeds of 4 M photons each, every photon aimed at the caustic objects
+#: (``caustic_only``, as ``caustics compare`` renders its reference). The 16 seeds
+#: give each texel's variance 15 degrees of freedom, so the Z-test's scale is known
+#: to about ±37 % (2σ of a χ²₁₅ / 15) rather than ±100 % with 4 seeds.
+GOLDEN_SETTINGS = {"receiver_map": [128, 128], "photons": 4_000_000, "seeds": 16,
+                   "seed": 1000}
+#: Per-scene budgets where 4 M photons per seed leave too much noise: the seabed's
+#: rock receiver is small, so its texels catch few photons.
 GOLDEN_OVERRIDES = {"seabed": {"photons": 40_000_000}}
+#: Seeds of a fresh render held against a golden reference (the golden's budget per
+#: seed, a quarter of its seeds): the golden carries 1/5 of the Z-test's variance.
+FRESH_SEEDS = 4
 
 
 class GoldenError(HarnessError):
@@ -54,11 +78,17 @@ class GoldenError(HarnessError):
 
 @dataclass(frozen=True)
 class Golden:
-    """One scene's golden receiver maps and its manifest entry."""
+    """One scene's golden receiver maps (variance = that of the stored mean, rounding
+    included) and its manifest entry."""
 
     scene: str
     receivers: tuple[ReceiverMap, ...]
     entry: dict
+
+    @property
+    def photons(self) -> int:
+        """Photons over all seeds."""
+        return int(self.entry["photons"]) * int(self.entry["seeds"])
 
 
 def _sha256(path: Path) -> str:
@@ -66,7 +96,10 @@ def _sha256(path: Path) -> str:
 
 
 def golden_scene(scenes_dir: Path, name: str) -> Scene:
-    """The committed scene ``name`` with :data:`GOLDEN_SETTINGS` (and its overrides)."""
+    """The committed scene ``name`` with :data:`GOLDEN_SETTINGS` (and its overrides).
+
+    Raises the loader's SceneError (naming the file) when the scene file is missing.
+    """
     settings = {**GOLDEN_SETTINGS, **GOLDEN_OVERRIDES.get(name, {})}
     return with_settings(load_scene(Path(scenes_dir) / f"{name}.toml"), settings)
 
@@ -76,11 +109,20 @@ def read_manifest(golden_dir: Path) -> dict:
     path = Path(golden_dir) / "manifest.json"
     try:
         manifest = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as error:
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
         raise GoldenError(f"{path}: unreadable manifest ({error})") from None
-    if manifest.get("format") != FORMAT:
-        raise GoldenError(f"{path}: format {manifest.get('format')!r}, expected {FORMAT}")
+    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
+        found = manifest.get("format") if isinstance(manifest, dict) else None
+        raise GoldenError(f"{path}: format {found!r}, expected {FORMAT}")
+    if not isinstance(manifest.get("scenes"), dict):
+        raise GoldenError(f"{path}: no 'scenes' table")
     return manifest
+
+
+def _rounding_variance(stored: np.ndarray, scale: float) -> np.ndarray:
+    """Variance of rounding to half floats: ulp² / 12 of each stored value."""
+    ulp = np.spacing(np.abs(stored).astype(np.float16)).astype(np.float64)
+    return (ulp * scale) ** 2 / 12.0
 
 
 def load_golden(golden_dir: Path, name: str) -> Golden:
@@ -88,36 +130,68 @@ def load_golden(golden_dir: Path, name: str) -> Golden:
     golden_dir = Path(golden_dir)
     entry = read_manifest(golden_dir)["scenes"].get(name)
     if entry is None:
-        raise GoldenError(f"{golden_dir}: no golden reference for {name}")
+        raise GoldenError(f"{golden_dir / 'manifest.json'}: no golden reference for {name}")
     receivers = []
-    for i, extent in enumerate(entry["receiver_extent"]):
+    for i, (extent, scale) in enumerate(zip(entry["receiver_extent"], entry["scale"],
+                                            strict=True)):
         rel = f"{name}/receiver{i}.exr"
         path = golden_dir / rel
         if not path.is_file():
             raise GoldenError(f"{path}: missing")
         digest = _sha256(path)
-        if digest != entry["sha256"][rel]:
+        if digest != entry["sha256"].get(rel):
             raise GoldenError(f"{path}: SHA-256 {digest} does not match the manifest")
-        layers = read_exr(path)
-        receivers.append(ReceiverMap(layers["RGB"], tuple(extent), layers["variance"]))
+        try:
+            layers = read_exr(path)
+        except ExrError as error:
+            raise GoldenError(str(error)) from None
+        stored = layers["RGB"]
+        variance = (layers["sigma"].astype(np.float64) * scale) ** 2 + _rounding_variance(
+            stored, scale)
+        receivers.append(ReceiverMap((stored.astype(np.float64) * scale).astype(np.float32),
+                                     tuple(extent), variance.astype(np.float32)))
     return Golden(name, tuple(receivers), entry)
 
 
-def _render(scene: Scene, out: Path, rel_dir: str) -> dict:
+def fresh_reference(scene: Scene, *, seed: int, seeds: int = FRESH_SEEDS):
+    """The photon tracer's caustic maps of ``scene`` (golden settings) on ``seeds``
+    seeds from ``seed``: what the Z-test holds against a golden reference. Returns
+    ``(maps, photons over all seeds)``."""
+    fresh = with_settings(scene, {"seed": seed, "seeds": seeds})
+    estimate = estimate_receivers(fresh, target_noise=1e-12, caustic_only=True)
+    return estimate.caustic, int(estimate.photons) * seeds
 
+
+def _write_half(path: Path, irradiance: np.ndarray, variance: np.ndarray) -> float:
+    """Write one golden map (see the module docstring); returns its scale."""
+    import OpenEXR  # noqa: PLC0415  (only regeneration writes half floats)
+
+    scale = float(np.max(irradiance)) or 1.0
+    layers = {"RGB": (irradiance / scale).astype(np.float16),
+              "sigma": (np.sqrt(np.maximum(variance, 0.0)) / scale).astype(np.float16)}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    OpenEXR.File(header, layers).write(str(path))
+    os.chmod(path, 0o644)
+    return scale
+
+
+def _render(scene: Scene, out: Path, rel_dir: str) -> dict:
     start = time.perf_counter()
-    estimate = estimate_receivers(scene, target_noise=1e-12)  # spend the whole budget
+    # Spend the whole budget: no noise target stops it early.
+    estimate = estimate_receivers(scene, target_noise=1e-12, caustic_only=True)
     seconds = time.perf_counter() - start
-    hashes = {}
+    hashes, scales = {}, []
     for i, rmap in enumerate(estimate.caustic):
         rel = f"{rel_dir}/receiver{i}.exr"
-        write_exr(out / rel, {"RGB": rmap.irradiance, "variance": rmap.variance})
+        scales.append(_write_half(out / rel, rmap.irradiance, rmap.variance))
         hashes[rel] = _sha256(out / rel)
     s = scene.settings
-    return {"photons": estimate.photons, "seeds": s.seeds, "seed": s.seed,
+    return {"photons": int(estimate.photons), "seeds": s.seeds, "seed": s.seed,
             "relative_noise": estimate.relative_noise, "seconds": seconds,
             "receiver_extent": [list(m.extent) for m in estimate.caustic],
-            "resolution": list(s.receiver_map), "sha256": hashes, "versions": versions()}
+            "resolution": list(s.receiver_map), "scale": scales, "sha256": hashes,
+            "caustic_only": True, "versions": versions()}
 
 
 def regenerate(golden_dir: Path, scenes_dir: Path, *, names=GOLDEN_SCENES,

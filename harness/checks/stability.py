@@ -16,12 +16,15 @@ from __future__ import annotations
 import numpy as np
 
 from harness.raycast import ReceiverTracer
+from harness.studies.convergence import OUTCOMES, classify
 from renderers.caustics_mapping.caustic_trace import STATUS
+from renderers.caustics_mapping.lights import light_setups
+from renderers.caustics_mapping.presets import resolve_settings
 from renderers.results import RenderResult
 from scenes.geometry import SceneGeometry
 from scenes.model import DirectionalLight, Scene, WaterSurface
 
-__all__ = ["incident_flux_bound", "off_receiver_flux", "stability_summary"]
+__all__ = ["estimate_outcomes", "incident_flux_bound", "off_receiver_flux", "stability_summary"]
 
 
 def incident_flux_bound(scene: Scene, geometry: SceneGeometry) -> np.ndarray:
@@ -105,3 +108,42 @@ def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResul
             if r["estimator"] == "newton" and not r["safeguarded"] and r["iteration"] == last:
                 summary["plain newton oscillating"] = round(float(r["oscillating"]), 4)
     return summary
+
+
+def estimate_outcomes(scene: Scene, geometry: SceneGeometry, hits: dict[str, np.ndarray],
+                      *, tolerance_texels: float = 1.0) -> dict[str, float]:
+    """Outcome shares of the estimator's runs, judged from the history of its
+    estimates against exact ray casts, never from the status the renderer assigned
+    (:func:`harness.studies.convergence.classify`: ``diverged`` = the last estimate
+    is not finite, negative or over 10x the exact distance; ``oscillating`` = the
+    last two steps change sign, the last at least 3/4 of the one before and over a
+    texel). Vertices whose exact ray meets no receiver are left out; so are those
+    the trace never estimated (empty, total internal reflection, no exit).
+
+    Returns the share of each outcome (:data:`OUTCOMES`) and ``count`` (vertices
+    judged)."""
+    status = hits["status"].astype(int)
+    traced = ~np.isin(status, [STATUS["empty"], STATUS["tir"], STATUS["no_exit"]])
+    exact = ReceiverTracer(geometry)(hits["origin"][traced], hits["direction"][traced])
+    history = hits["history"][traced].astype(np.float64)
+    lost = status[traced] == STATUS["lost"]
+    points = np.where(np.isfinite(exact.position), exact.position, hits["origin"][traced])
+    # One caustic-map texel at the exact hit, seen from the light that traced it.
+    settings = resolve_settings(scene.settings)
+    setups = light_setups(scene, geometry, frustum_fit=settings.frustum)
+    which = hits.get("light", np.zeros(len(status)))[traced].astype(int)
+    texel = np.empty(len(points))
+    for index, setup in enumerate(setups):
+        mine = which == index
+        view = setup.map_views[0]
+        if view.perspective:
+            distance = np.linalg.norm(points[mine] - setup.position, axis=1)
+            texel[mine] = 2 * view.half_size * distance / settings.caustic_map
+        else:
+            texel[mine] = 2 * view.half_size / settings.caustic_map
+    outcome = classify(history, lost, exact.distance, texel,
+                       tolerance_texels=tolerance_texels)
+    judged = outcome != ""
+    count = int(judged.sum())
+    shares = {name: float((outcome == name).sum()) / max(count, 1) for name in OUTCOMES}
+    return {**shares, "count": count}

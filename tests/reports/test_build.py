@@ -117,13 +117,23 @@ def test_metric_table_shows_value_noise_floor_and_formula(linked, comparison):
         assert METRIC_FORMULAS[metric] in unescape(html), metric
 
 
-def test_thresholds_pass_fail_and_none(linked, embedded):
-    """The summary counts passes and failures; a scene without checks says so."""
+def test_checks_pass_fail_gaps_and_none_by_kind(linked, embedded):
+    """The summary counts passes, failures and known gaps, and per kind; a scene
+    without checks says so. The page lists each kind under its own heading with what
+    the kind means (a regression lock guards against change, not accuracy), a known
+    gap apart from a failure."""
     index = (linked / "index.html").read_text("utf-8")
-    assert "1/2 passed" in index and "(1 failed)" in index
-    assert "no thresholds checked" in index
-    scene = (linked / "glass_sphere-paper" / "index.html").read_text("utf-8")
+    assert "1/3 passed" in index and "(1 failed)" in index and "(1 known gap)" in index
+    assert "0/1 · 0/0 · 1/2" in index
+    assert "no accuracy checks applied" in index
+    scene = unescape((linked / "glass_sphere-paper" / "index.html").read_text("utf-8"))
     assert scene.count('<tr class="fail">') == 1 and "FAIL" in scene
+    assert scene.count('<tr class="gap">') == 1 and "a known gap, for the test" in scene
+    for heading in ("Physical requirements: 0/1 passed, 1 known gap",
+                    "Method targets: 0/0 passed", "Regression locks: 1/2 passed, 1 failed"):
+        assert heading in re.sub(r"<[^>]+>", "", scene), heading
+    assert "guards against change, not accuracy" in scene
+    assert "|v − 1| ≤ 0.02" in scene
 
 
 def test_provenance_settings_and_claims_are_shown(linked, comparison):
@@ -192,7 +202,7 @@ def test_optional_parts_may_be_missing(tmp_path, comparison):
                 images={k: v for k, v in comparison.images.items() if k.startswith("camera/")})
     build_report(tmp_path, [c])
     html = (tmp_path / "glass_sphere-paper" / "index.html").read_text("utf-8")
-    assert html.count("<p>Not run.</p>") == 3 and "No thresholds checked." in html
+    assert html.count("<p>Not run.</p>") == 3 and "No accuracy checks applied." in html
     assert "No originals written." in html and "receiver0_signed" not in html
 
 

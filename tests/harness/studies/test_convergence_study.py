@@ -57,15 +57,15 @@ HARD = sorted((SCENES / "hard").glob("*.toml"))
 
 @pytest.mark.parametrize("path", HARD, ids=lambda p: p.stem)
 def test_safeguarded_newton_never_diverges_on_hard_cases(path):
-    """Safeguarded Newton on every hard case, 0..8 iterations: no vertex diverges
-    or oscillates at any iteration count (it converges, stalls at a fixed point, or
-    is lost, each counted)."""
+    """Physical requirement (numerical stability): safeguarded Newton on every hard
+    case, 0..8 iterations: no vertex diverges or oscillates at any iteration count,
+    judged from the history of its estimates against exact ray casts
+    (harness.studies.convergence.classify; the safeguarded renderer never assigns
+    the status "diverged" itself). The judgement can fail: the plain form oscillates
+    on the oscillation hard case (test_plain_newton_oscillation_is_detected)."""
     for row in _study(path, (("newton", True),)):
         assert row["diverged"] == 0.0, row
         assert row["oscillating"] == 0.0, row
-        total = row["converged"] + row["stalled"] + row["lost"] + row["diverged"] + \
-            row["oscillating"]
-        assert total <= 1.0 + 1e-9
 
 
 def test_plain_newton_oscillation_is_detected():

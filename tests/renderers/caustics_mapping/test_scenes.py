@@ -6,8 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from harness.checks.stability import estimate_outcomes
 from renderers.caustics_mapping import render_frame
 from renderers.caustics_mapping.caustic_trace import STATUS
+from scenes.geometry import build_geometry
 
 from .conftest import SCENES, small_scene
 
@@ -45,17 +47,26 @@ def test_scene_renders_finite(ctx, path, estimator):
     assert result.metadata["lost_splats"] == int(np.sum(frame.hits["status"] == STATUS["lost"]))
 
 
-@pytest.mark.parametrize("safeguarded", [False, True])
-def test_safeguarded_runs_on_newton_oscillation(ctx, safeguarded):
-    """The Newton-oscillation hard case with and without the safeguard: finite, and
-    the safeguard never reports a divergence (it replaces non-finite updates by
-    bisection)."""
+def test_safeguarded_runs_on_newton_oscillation(ctx):
+    """Physical requirement (numerical stability) on the Newton-oscillation hard case,
+    judged from the history of the estimates against exact ray casts
+    (``harness.checks.stability.estimate_outcomes``), not from the status the
+    renderer assigns (which never says "diverged" for a run that oscillates): plain
+    Newton oscillates on a sizeable share of vertices (measured 35 % of 1,100 at
+    grid 48 and 8 iterations; asserted > 5 %, so the judgement can fail), and the
+    safeguarded form leaves no vertex diverged or oscillating. Both finite."""
     path = next(p for p in SCENES if p.stem == "newton_oscillation")
-    frame = render_frame(small_scene(path, safeguarded=safeguarded), ctx=ctx)
-    for key, array in frame.hits.items():
-        _finite(f"hits[{key}]", array)
-    if safeguarded:
-        assert frame.result.metadata["status_counts"]["diverged"] == 0
+    outcomes = {}
+    for safeguarded in (False, True):
+        scene = small_scene(path, safeguarded=safeguarded)
+        frame = render_frame(scene, ctx=ctx)
+        for key, array in frame.hits.items():
+            _finite(f"hits[{key}]", array)
+        outcomes[safeguarded] = estimate_outcomes(scene, build_geometry(scene), frame.hits)
+    assert outcomes[True]["count"] > 500 and outcomes[False]["count"] > 500
+    assert outcomes[False]["oscillating"] + outcomes[False]["diverged"] > 0.05, outcomes[False]
+    assert outcomes[True]["diverged"] == 0.0 and outcomes[True]["oscillating"] == 0.0, \
+        outcomes[True]
 
 
 def test_receiver_edge_counts_lost_splats(ctx):

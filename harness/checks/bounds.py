@@ -1,0 +1,202 @@
+"""The reviewed TOML files of accuracy checks: regression locks, method targets and
+known gaps, validated like scene files (every problem names the file and field).
+
+Regression locks (``data/regression_locks.toml``, written by ``caustics calibrate``)::
+
+    [[lock]]
+    scene = "glass_sphere"
+    view = "receiver0"          # camera | receiver<i>
+    region = "caustic"          # full | caustic | object_masked
+    metric = "relmse"           # see reports.records.METRIC_FORMULAS
+    kind = "max"                # max: value <= bound; min: value >= bound;
+                                # band: |value - 1| <= bound (flux ratio)
+    bound = 0.12
+    provenance = "4 references 0.081..0.093, platform jitter ..., 2026-11-22, mitsuba 3.9.1"
+
+Method targets (``data/method_targets.toml``)::
+
+    [[target]]
+    scene = "glass_sphere"
+    method = "strong"
+    metric = "relmse"           # a measure of harness.checks.targets.MEASURES
+    kind = "max"
+    bound = 0.012
+    reason = "why this number (where it comes from)"
+    contrast = "paper"          # optional: a method that must miss the target, so
+                                # the measure is shown able to fail
+    gap = ""                    # non-empty: missed today; the reason names the gap
+
+Known gaps of physical requirements (``data/known_gaps.toml``)::
+
+    [[gap]]
+    check = "flux agreement"    # harness.checks.physical check name
+    scene = "bunny"
+    method = "paper"            # or "*"
+    reason = "what is wrong, measured"
+
+A file that is missing or unreadable is a :class:`ChecksFileError` naming it; it is
+never taken for "no checks".
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+from reports.records import METRIC_FORMULAS, MetricValue, ThresholdCheck
+from scenes.errors import HarnessError
+from scenes.schema import build, spec
+
+__all__ = ["Bound", "ChecksFileError", "Gap", "Target", "check_locks", "holds", "load_gaps",
+           "load_locks", "load_targets"]
+
+LOCK = "regression lock"
+
+
+class ChecksFileError(HarnessError):
+    """A locks, targets or gaps file is missing or unreadable (the message names it)."""
+
+
+def holds(kind: str, bound: float, value: float) -> bool:
+    """Whether ``value`` meets ``bound`` under ``kind`` (NaN never does)."""
+    if not math.isfinite(value):
+        return False
+    if kind == "max":
+        return value <= bound
+    if kind == "min":
+        return value >= bound
+    return abs(value - 1.0) <= bound
+
+
+def _view_problem(view: str) -> list[tuple[str, str]]:
+    if view != "camera" and not (view.startswith("receiver") and view[8:].isdigit()):
+        return [("view", "must be camera or receiver<i>")]
+    return []
+
+
+@dataclass(frozen=True)
+class Bound:
+    """One regression lock: today's calibrated value with a margin."""
+
+    scene: str = spec(doc="Scene name.")
+    view: str = spec(doc="camera or receiver<i>.")
+    region: Literal["full", "caustic", "object_masked"] = spec(doc="Region scored.")
+    metric: str = spec(doc="Metric key.")
+    kind: Literal["max", "min", "band"] = spec(doc="How the bound applies.")
+    bound: float = spec(doc="The bound.", ge=0)
+    provenance: str = spec(doc="How the bound was calibrated.")
+
+    def validate(self) -> list[tuple[str, str]]:
+        problems = _view_problem(self.view)
+        if self.metric not in METRIC_FORMULAS:
+            problems.append(("metric", f"unknown metric {self.metric!r}"))
+        if not self.provenance.strip():
+            problems.append(("provenance", "must say how the bound was calibrated"))
+        return problems
+
+    def holds(self, value: float) -> bool:
+        """Whether ``value`` meets the bound (NaN never does)."""
+        return holds(self.kind, self.bound, value)
+
+
+@dataclass(frozen=True)
+class Target:
+    """One method target: what a method should reach on a scene, and why."""
+
+    scene: str = spec(doc="Scene name.")
+    method: str = spec(doc="Method (preset) name.")
+    metric: str = spec(doc="Measure (harness.checks.targets.MEASURES).")
+    kind: Literal["max", "min", "band"] = spec(doc="How the bound applies.")
+    bound: float = spec(doc="The target.", ge=0)
+    reason: str = spec(doc="Why this number: where it comes from.")
+    view: str = spec("receiver0", doc="camera or receiver<i>.")
+    region: Literal["full", "caustic", "object_masked"] = spec("caustic", doc="Region.")
+    contrast: str = spec("", doc="A method that misses the target (shows it can fail).")
+    gap: str = spec("", doc="Non-empty: missed today; names the gap.")
+
+    def validate(self) -> list[tuple[str, str]]:
+        from harness.checks.targets import MEASURES  # noqa: PLC0415  (no import cycle)
+
+        problems = _view_problem(self.view)
+        if self.metric not in MEASURES:
+            problems.append(("metric", f"unknown measure {self.metric!r} "
+                                       f"(one of {', '.join(sorted(MEASURES))})"))
+        if not self.reason.strip():
+            problems.append(("reason", "must say where the number comes from"))
+        return problems
+
+
+@dataclass(frozen=True)
+class Gap:
+    """A physical requirement a method misses today."""
+
+    check: str = spec(doc="Check name (harness.checks.physical).")
+    scene: str = spec(doc="Scene name.")
+    method: str = spec(doc="Method name, or * for every method.")
+    reason: str = spec(doc="What is wrong, measured.")
+
+    def validate(self) -> list[tuple[str, str]]:
+        return [] if self.reason.strip() else [("reason", "must name the gap")]
+
+
+@dataclass(frozen=True)
+class _Locks:
+    lock: tuple[Bound, ...] = spec(doc="The locks.")
+
+
+@dataclass(frozen=True)
+class _Targets:
+    target: tuple[Target, ...] = spec(doc="The targets.")
+
+
+@dataclass(frozen=True)
+class _Gaps:
+    gap: tuple[Gap, ...] = spec((), doc="The known gaps.")
+
+
+def _load(path: str | Path, cls: type):
+    path = Path(path)
+    if not path.is_file():
+        raise ChecksFileError(f"{path}: no such file" if not path.exists()
+                              else f"{path}: not a file")
+    try:
+        table = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as error:
+        raise ChecksFileError(f"{path}: cannot read file ({error})") from None
+    except tomllib.TOMLDecodeError as error:
+        raise ChecksFileError(f"{path}: TOML syntax error ({error})") from None
+    return build(cls, table, file=str(path), base_dir=path.parent)
+
+
+def load_locks(path: str | Path) -> tuple[Bound, ...]:
+    """Read and validate a regression-locks file."""
+    return _load(path, _Locks).lock
+
+
+def load_targets(path: str | Path) -> tuple[Target, ...]:
+    """Read and validate a method-targets file."""
+    return _load(path, _Targets).target
+
+
+def load_gaps(path: str | Path) -> tuple[Gap, ...]:
+    """Read and validate a known-gaps file."""
+    return _load(path, _Gaps).gap
+
+
+def check_locks(scene: str, metrics: list[MetricValue] | tuple[MetricValue, ...],
+                bounds: tuple[Bound, ...]) -> tuple[ThresholdCheck, ...]:
+    """Check every lock of ``scene`` against its metric; a missing metric fails."""
+    values = {(m.view, m.region, m.metric): m.value for m in metrics}
+    checks = []
+    for b in bounds:
+        if b.scene != scene:
+            continue
+        value = values.get((b.view, b.region, b.metric), float("nan"))
+        checks.append(ThresholdCheck(metric=b.metric, region=b.region, view=b.view,
+                                     bound=b.bound, kind=b.kind, value=value,
+                                     passed=b.holds(value), provenance=b.provenance,
+                                     category=LOCK))
+    return tuple(checks)

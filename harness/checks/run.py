@@ -1,0 +1,147 @@
+"""Every accuracy check that applies to one comparison, as ``caustics compare`` runs
+them, with the same functions the test suite uses.
+
+* **Physical requirements** on this run: the method's outputs against this run's
+  reference (finite, energy, flux agreement, no TIR in a sphere) and, where the
+  ideal-sphere answer describes the scene, the reference against it. Any scene.
+* **Method targets**: this run's measures, for a committed scene run without setting
+  overrides (the targets hold at the scene's own settings).
+* **Regression locks**: the method re-rendered at the golden settings against the
+  golden reference, for a committed scene (:mod:`harness.checks.locks`).
+
+Where a kind does not apply, the reason is returned beside the checks; a missing or
+unreadable file is an error naming it, never "no checks".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from harness.checks import GAPS_FILE, TARGETS_FILE
+from harness.checks.bounds import Bound, Gap, Target, load_gaps, load_locks, load_targets
+from harness.checks.golden import GOLDEN_SETTINGS, load_golden
+from harness.checks.locks import (
+    LOCKED_METHODS,
+    golden_applies,
+    lock_checks,
+    not_committed,
+    realtime_maps,
+)
+from harness.checks.physical import (
+    apply_gaps,
+    method_requirements,
+    reference_requirements,
+)
+from harness.checks.targets import check_targets, target_measures
+from renderers.methods import load_method
+from renderers.results import ReceiverMap
+from reports.records import CHECK_KINDS, SceneComparison, ThresholdCheck
+from scenes import Scene, load_scene, with_settings
+from scenes.geometry import build_geometry
+
+__all__ = ["CheckFiles", "Checked", "comparison_checks", "count_by_kind", "load_check_files"]
+
+
+@dataclass(frozen=True)
+class CheckFiles:
+    """The three reviewed files, loaded."""
+
+    locks: tuple[Bound, ...]
+    targets: tuple[Target, ...]
+    gaps: tuple[Gap, ...]
+
+
+def load_check_files(locks: Path, targets: Path = TARGETS_FILE,
+                     gaps: Path = GAPS_FILE) -> CheckFiles:
+    """Load all three; each missing or unreadable file raises, naming it."""
+    return CheckFiles(load_locks(locks), load_targets(targets), load_gaps(gaps))
+
+
+@dataclass(frozen=True)
+class Checked:
+    """The checks that applied, and why each kind that did not, did not."""
+
+    checks: tuple[ThresholdCheck, ...]
+    not_applied: dict[str, str] = field(default_factory=dict)
+
+
+def count_by_kind(checks) -> dict[str, dict[str, int]]:
+    """Per kind (:data:`reports.records.CHECK_KINDS`): checked, passed, failed and
+    known gaps (a known gap is neither passed nor failed)."""
+    out = {}
+    for kind in CHECK_KINDS:
+        mine = [c for c in checks if c.category == kind]
+        out[kind] = {"checked": len(mine),
+                     "passed": sum(1 for c in mine if c.outcome in ("pass", "gap closed")),
+                     "failed": sum(1 for c in mine if c.outcome == "FAIL"),
+                     "known gaps": sum(1 for c in mine if c.outcome == "known gap")}
+    return out
+
+
+def _maps(comparison: SceneComparison, geometry, layer: str) -> list[ReceiverMap]:
+    maps = []
+    for i, receiver in enumerate(geometry.receivers):
+        variance = None
+        if layer == "reference":
+            variance = comparison.images.get(f"receiver{i}/reference_variance")
+        maps.append(ReceiverMap(np.asarray(comparison.images[f"receiver{i}/{layer}"]),
+                                receiver.extent, variance))
+    return maps
+
+
+def _unchanged(scene: Scene, method: str, scenes_dir: Path) -> bool:
+    """The scene's settings are the committed file's, after the method configured both
+    (no ``--set`` or other override)."""
+    try:
+        committed = load_method(method).configure(
+            load_scene(Path(scenes_dir) / f"{scene.name}.toml"))
+    except Exception:  # any failure means "not the committed scene"
+        return False
+    return committed.settings == scene.settings
+
+
+def comparison_checks(scene: Scene, method: str, comparison: SceneComparison,
+                      files: CheckFiles, *, scenes_dir: Path, golden_dir: Path,
+                      ctx=None) -> Checked:
+    """All checks of one comparison (module docstring). ``scene`` is the scene as the
+    method configured it (``method.configure``)."""
+    geometry = build_geometry(scene)
+    method_maps = _maps(comparison, geometry, "method")
+    reference_maps = _maps(comparison, geometry, "reference")
+    not_applied = {}
+    checks = []
+    stability = comparison.stability or {}
+    if "flux_over_bound" in stability:
+        checks += method_requirements(scene, geometry, method_maps=method_maps,
+                                      reference_maps=reference_maps, stability=stability)
+    else:
+        not_applied["physical requirement (method)"] = "no stability summary"
+    if all(m.variance is not None for m in reference_maps):
+        checks += reference_requirements(scene, geometry, reference_maps)
+    checks = apply_gaps(checks, files.gaps, scene=scene.name, method=method)
+
+    why = not_committed(scene, scenes_dir)
+    if why is None and not _unchanged(scene, method, scenes_dir):
+        why = "settings differ from the committed scene's"
+    if why is None:
+        status = (comparison.provenance.get("caustics_mapping") or {}).get("status_counts")
+        measures = target_measures(reference_maps[0], method_maps[0], stability=stability,
+                                   status_counts=status)
+        checks += check_targets(files.targets, scene=scene.name, method=method,
+                                measures=measures)
+    else:
+        not_applied["method target"] = why
+    why = golden_applies(scene, scenes_dir, golden_dir)
+    if why is None and method not in LOCKED_METHODS:
+        why = f"no locks for method {method}"
+    if why is None:
+        golden = load_golden(golden_dir, scene.name)
+        at_golden = with_settings(scene, {"receiver_map": GOLDEN_SETTINGS["receiver_map"]})
+        maps = realtime_maps(at_golden, ctx=ctx)
+        checks += lock_checks(scene, method, maps, golden, files.locks)
+    else:
+        not_applied["regression lock"] = why
+    return Checked(tuple(checks), not_applied)
