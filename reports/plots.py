@@ -145,10 +145,12 @@ def _speedup_point(speedup: EqualErrorSpeedup, point, front_times, front_errors)
 
 
 def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
-                point: tuple[float, float] | None = None):
-    """Time against relMSE (log-log): every caustics-mapping configuration, their
-    Pareto front (the table's ``pareto`` column), the reference's own
-    error-versus-time curve, and the equal-error speedup in the title.
+                point: tuple[float, float] | None = None,
+                cold: EqualErrorSpeedup | None = None):
+    """Warm time against relMSE (log-log): every caustics-mapping configuration,
+    their Pareto front (the table's ``pareto`` column), the reference's own
+    error-versus-time curve warm (solid) and cold (dashed), and the equal-error
+    speedups in the title.
 
     Parameters
     ----------
@@ -160,10 +162,13 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
     point : (float, float), optional
         The real-time (time s, relMSE) the speedup was computed for; when not
         given, the Pareto point nearest to ``reference_time / speedup`` in time.
+    cold : EqualErrorSpeedup, optional
+        The cold-against-cold speedup, named in the title beside the warm one.
     """
     plt = _pyplot()
     series = np.array(table.column("series"))
-    times = _loggable(_float(table.column("time_s")))
+    times = _loggable(_float(table.column("time_warm_s")))
+    cold_times = _loggable(_float(table.column("time_cold_s")))
     errors = _loggable(_float(table.column("relmse")))
     with plt.rc_context(_RC):
         figure, ax = plt.subplots(figsize=(5.5, 3.8))
@@ -183,11 +188,15 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
         if ref.size:
             ref = ref[np.argsort(times[ref])]
             ax.plot(times[ref], errors[ref], "-s", color="tab:red", markersize=4,
-                    label="reference (Mitsuba) error vs time")
+                    label="reference (Mitsuba) error vs warm time")
+            ax.plot(cold_times[ref], errors[ref], "--", color="tab:red", alpha=0.6,
+                    label="reference, cold (build + compile + warm)")
         title = "Cost versus accuracy"
         if speedup is not None and _positive(speedup.speedup, speedup.reference_time):
             method_time, method_error = _speedup_point(speedup, point, times[front], errors[front])
-            title += f" — equal-error speedup {speedup.speedup:.4g}× ({speedup.kind})"
+            title += f" — equal-error speedup {speedup.speedup:.4g}× warm ({speedup.kind})"
+            if cold is not None:
+                title += f", {cold.speedup:.3g}× cold"
             if _positive(method_time, method_error):
                 ax.annotate("", xy=(speedup.reference_time, method_error),
                             xytext=(method_time, method_error),
@@ -196,7 +205,7 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
                         label=f"reference at equal error ({speedup.reference_time:.3g} s)")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("time (s)")
+        ax.set_xlabel("warm time (s): the passes producing the receiver maps")
         ax.set_ylabel("relMSE")
         ax.set_title(title)
         ax.grid(True, which="both", alpha=0.3)
@@ -215,7 +224,8 @@ def write_pdfs(folder, comparison) -> list[str]:
         written.append("convergence.pdf")
     if comparison.cost is not None and comparison.cost.rows:
         atomic_write_bytes(folder / "cost_accuracy.pdf", figure_bytes(cost_figure(
-            comparison.cost, speedup=comparison.speedup, point=comparison.speedup_point),
+            comparison.cost, speedup=comparison.speedup, point=comparison.speedup_point,
+            cold=comparison.speedup_cold),
             fmt="pdf"))
         written.append("cost_accuracy.pdf")
     return written

@@ -1,33 +1,65 @@
 """What accuracy costs in time: (frame time, error) of many configurations of the
 real-time method, the reference's own error-versus-time curve on the same axes, the
-Pareto front and the equal-error speedup (``harness.studies.pareto``).
+Pareto front and the equal-error speedup (``harness.studies.pareto``), warm against
+warm (the headline) and cold against cold.
 
 Error is the relMSE of receiver 0's caustic irradiance against the reference over
 the caustic region; time is that of the passes producing the receiver maps (the
 camera and shadow-map passes excluded), since the photon tracer it is compared
 with produces only those maps. Configurations vary one thing at a time around the scene's
 settings (grid, caustic-map size, splat width), plus every estimator at several
-iteration counts. The reference curve renders the photon tracer with growing photon
-budgets on a seed disjoint from the reference's and times it end to end
-(``time.perf_counter``, kernel compilation included: that is what it costs).
+iteration counts. The reference curve is :mod:`harness.studies.reference_curve`.
+Both sides are timed by one policy (:mod:`harness.studies.timing`): every row has
+``time_warm_s`` and ``time_cold_s``.
 """
 
 from __future__ import annotations
 
-import statistics
+import dataclasses
 
 import numpy as np
 
 from harness.compare.evaluate import score_value
 from harness.studies.pareto import EqualErrorSpeedup, equal_error_speedup, pareto_front
+from harness.studies.reference_curve import SEED_OFFSET, reference_curve
 from harness.studies.runner import RealtimeRunner, caustic_seconds
-from renderers.mitsuba.reference import estimate_receivers
+from harness.studies.timing import TIMING_POLICY, OneOffCosts
 from reports.records import Table
 
-__all__ = ["COLUMNS", "cost_study", "sweep_configs"]
+__all__ = ["COLUMNS", "CostOutcome", "cost_study", "sweep_configs"]
 
 COLUMNS = ("series", "label", "estimator", "iterations", "grid", "caustic_map",
-           "splat_sigma", "time_s", "relmse", "pareto")
+           "splat_sigma", "time_warm_s", "time_cold_s", "relmse", "pareto")
+
+
+@dataclasses.dataclass(frozen=True)
+class CostOutcome:
+    """What the cost study found.
+
+    Attributes
+    ----------
+    table : Table
+        :data:`COLUMNS`, one row per configuration and reference budget.
+    warm, cold : EqualErrorSpeedup or None
+        Equal-error speedup of the scene's own settings, warm against warm and
+        cold against cold (None where an error is zero).
+    point : (float, float)
+        That configuration's (warm time s, relMSE).
+    method, reference : OneOffCosts
+        Each side's build and compile seconds.
+    """
+
+    table: Table
+    warm: EqualErrorSpeedup | None
+    cold: EqualErrorSpeedup | None
+    point: tuple[float, float]
+    method: OneOffCosts
+    reference: OneOffCosts
+
+    def timing(self) -> dict:
+        """The policy and both sides' one-off costs (for metrics.json)."""
+        return {"policy": TIMING_POLICY, "method": self.method.as_dict(),
+                "reference": self.reference.as_dict()}
 
 
 def sweep_configs(*, quick: bool, splat: str = "points") -> list[dict]:
@@ -70,65 +102,58 @@ def _label(config: dict) -> str:
 
 
 def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarray, *,
-               reference_photons: int, quick: bool = False, progress=None,
-               ) -> tuple[Table, EqualErrorSpeedup | None, tuple[float, float] | None]:
-    """(table, equal-error speedup of the scene's own settings, that (time, error)).
+               reference_photons: int, quick: bool = False, progress=None) -> CostOutcome:
+    """Sweep the method's configurations and trace the reference's curve.
 
     Parameters
     ----------
     reference, caustic
-        Reference caustic irradiance of receiver 0 and its caustic region.
+        Reference caustic irradiance of receiver 0 (W/m²) and its caustic region.
     reference_photons
         Photons per seed of the reference; the curve uses 1/256 .. 1/4 of it
         (1/64 .. 1/4 when ``quick``).
     """
-
     s = runner.settings
-    rows = []
-    base_frame, base_time = runner.timed(clock=caustic_seconds)
-    base_error = score_value("relmse", base_frame.result.receivers[0].irradiance, reference,
-                             mask=caustic, exposure=None)
-    rows.append(_row("caustics_mapping", "scene settings", estimator=s.estimator,
-                     iterations=s.iterations, grid=s.grid, caustic_map=s.caustic_map,
-                     splat_sigma=s.splat_sigma, time_s=base_time, relmse=base_error))
-    for config in sweep_configs(quick=quick, splat=s.splat):
+    rows, warm_times = [], []
+    configs = [({}, "scene settings"), *((c, _label(c)) for c in sweep_configs(
+        quick=quick, splat=s.splat))]
+    for config, label in configs:
         frame, seconds = runner.timed(clock=caustic_seconds, **config)
         error = score_value("relmse", frame.result.receivers[0].irradiance, reference,
                             mask=caustic, exposure=None)
         merged = {"estimator": s.estimator, "iterations": s.iterations, "grid": s.grid,
                   "caustic_map": s.caustic_map, "splat_sigma": s.splat_sigma, **config}
-        rows.append(_row("caustics_mapping", _label(config), **merged, time_s=seconds,
-                         relmse=error))
-        if progress is not None:
+        rows.append(_row("caustics_mapping", label, **merged, relmse=error))
+        warm_times.append(seconds)
+        if config and progress is not None:
             progress()
-    fractions = _fractions(quick)
-    ref_times, ref_errors = [], []
-    # Timed as the method is (RealtimeRunner.timed): one untimed warm-up (kernel
-    # compilation is no more a reference cost than shader compilation is a frame
-    # cost), then the median of `repeats` runs (same seed, same estimate).
-    estimate_receivers(runner.scene, photons=1, seeds=1, target_noise=1e-12)
-    for fraction in fractions:
-        photons = max(1, reference_photons // fraction)
-        runs = [estimate_receivers(runner.scene, photons=photons, seeds=1,
-                                   seed=s.seed + 10_000 + fraction, target_noise=1e-12)
-                for _ in range(runner.repeats)]
-        estimate = runs[-1]
-        seconds = statistics.median(run.history[-1][2] for run in runs)
-        error = score_value("relmse", estimate.caustic[0].irradiance, reference,
-                            mask=caustic, exposure=None)
-        rows.append(_row("reference", f"photons={photons}", estimator="", iterations=0, grid=0,
-                         caustic_map=0, splat_sigma=0.0, time_s=seconds, relmse=error))
-        ref_times.append(seconds)
-        ref_errors.append(error)
-        if progress is not None:
-            progress()
+    method = runner.one_off(clock=caustic_seconds)
+    for row, warm in zip(rows, warm_times, strict=True):
+        row.update(time_warm_s=warm, time_cold_s=method.cold(warm))
+    budgets = [max(1, reference_photons // f) for f in _fractions(quick)]
+    curve = reference_curve(runner.scene, reference, caustic, budgets=budgets,
+                            repeats=runner.repeats, seed=s.seed + SEED_OFFSET,
+                            progress=progress)
+    for p in curve.points:
+        rows.append(_row("reference", f"photons={p.photons}", estimator="", iterations=0,
+                         grid=0, caustic_map=0, splat_sigma=0.0, time_warm_s=p.time_warm_s,
+                         time_cold_s=p.time_cold_s, relmse=p.relmse))
     # The caustics-mapping rows come first, so front indices are row indices.
     realtime = [r for r in rows if r["series"] == "caustics_mapping"]
-    front = set(pareto_front([r["time_s"] for r in realtime],
+    front = set(pareto_front([r["time_warm_s"] for r in realtime],
                              [r["relmse"] for r in realtime]).tolist())
     table = Table.from_records(COLUMNS, [{**row, "pareto": i in front}
                                          for i, row in enumerate(rows)])
-    speedup = None
-    if base_time > 0 and base_error > 0 and all(e > 0 for e in ref_errors):
-        speedup = equal_error_speedup(base_time, base_error, ref_times, ref_errors)
-    return table, speedup, (base_time, base_error)
+    base = rows[0]
+    errors = [p.relmse for p in curve.points]
+    speedups = {}
+    for kind in ("warm", "cold"):
+        t = base[f"time_{kind}_s"]
+        speedups[kind] = (equal_error_speedup(t, base["relmse"],
+                                              [getattr(p, f"time_{kind}_s") for p in curve.points],
+                                              errors)
+                          if t > 0 and base["relmse"] > 0 and all(e > 0 for e in errors)
+                          else None)
+    return CostOutcome(table=table, warm=speedups["warm"], cold=speedups["cold"],
+                       point=(base["time_warm_s"], base["relmse"]), method=method,
+                       reference=curve.one_off)

@@ -1,16 +1,21 @@
 """Render one scene with the caustics-mapping renderer under many settings.
 
-One GL context and one geometry build serve every configuration of a study, and a
-warm-up frame compiles the shaders before anything is timed. Frame time is the sum
-of the per-pass times the renderer reports (on llvmpipe: ``ctx.finish()`` around
-each pass and ``time.perf_counter``; the renderer's ``timer`` field says which).
+One GL context and one geometry build serve every configuration of a study (their
+time is the method's ``t_build``), and an untimed warm-up frame of each
+configuration compiles its shaders before it is timed (the first one's excess over
+its warm time is the method's ``t_compile``; :mod:`harness.studies.timing`). Frame
+time is the sum of the per-pass times the renderer reports (on llvmpipe:
+``ctx.finish()`` around each pass and ``time.perf_counter``; the renderer's
+``timer`` field says which); the receiver-map pass includes the maps' read-back.
 """
 
 from __future__ import annotations
 
 import statistics
+import time
 from typing import Any
 
+from harness.studies.timing import OneOffCosts
 from renderers.caustics_mapping.context import create_context
 from renderers.caustics_mapping.presets import resolve_settings
 from renderers.caustics_mapping.renderer import render_frame
@@ -42,12 +47,15 @@ class RealtimeRunner:
     """
 
     def __init__(self, scene: Scene, *, repeats: int = 3):
-
+        start = time.perf_counter()
         self.scene = scene
         self.geometry = build_geometry(scene)
         self.repeats = repeats
         self.ctx = create_context()
-        self._warm = False
+        #: The one-off set-up (s): the scene's meshes and the GL context.
+        self.build_s = time.perf_counter() - start
+        self._first: dict[tuple, dict[str, float]] = {}
+        self._timed: dict[tuple, list[dict[str, float]]] = {}
 
     @property
     def settings(self):
@@ -70,11 +78,30 @@ class RealtimeRunner:
 
     def timed(self, *, clock=frame_seconds, **overrides: Any):
         """(frame, seconds): the median of ``clock(timings)`` over ``repeats``
-        renders, after a warm-up render on first use (shader compilation is not a
-        frame cost). ``clock`` is :func:`frame_seconds` or :func:`caustic_seconds`."""
-        if not self._warm:
-            self.render(**overrides)
-            self._warm = True
+        renders, after an untimed warm-up render on first use of these overrides
+        (shader compilation is not a frame cost). ``clock`` is
+        :func:`frame_seconds` or :func:`caustic_seconds`."""
+        key = tuple(sorted(overrides.items()))
+        if key not in self._first:
+            self._first[key] = self.render(**overrides).result.timings
         frames = [self.render(**overrides) for _ in range(self.repeats)]
-        seconds = statistics.median(clock(f.result.timings) for f in frames)
+        self._timed[key] = [f.result.timings for f in frames]
+        seconds = statistics.median(clock(t) for t in self._timed[key])
         return frames[-1], seconds
+
+    def median(self, *, clock=frame_seconds, **overrides: Any) -> float:
+        """The median of ``clock(timings)`` over the renders :meth:`timed` last
+        took of these overrides (another scope of the same frames)."""
+        key = tuple(sorted(overrides.items()))
+        return statistics.median(clock(t) for t in self._timed[key])
+
+    def one_off(self, *, clock=caustic_seconds) -> OneOffCosts:
+        """The method's one-off costs: ``build_s``, and the first frame's excess
+        over the warm time of the same configuration (the first one rendered), both
+        under ``clock``'s scope."""
+        if not self._first:
+            raise RuntimeError("one_off() needs a timed() configuration first")
+        key = next(iter(self._first))
+        first = clock(self._first[key])
+        warm = statistics.median(clock(t) for t in self._timed[key])
+        return OneOffCosts(build_s=self.build_s, compile_s=max(first - warm, 0.0))

@@ -8,6 +8,7 @@ replaced by the shared include of this package.
 
 from __future__ import annotations
 
+import os
 import re
 import time
 from dataclasses import dataclass, field
@@ -20,7 +21,8 @@ import moderngl
 from scenes.errors import HarnessError
 
 __all__ = [
-    "GLError", "PassTimer", "ResourcePool", "create_context", "load_program", "pool",
+    "DEVICE_ENV", "GLError", "PassTimer", "ResourcePool", "create_context", "load_program",
+    "pool",
     "release_framebuffer",
 ]
 
@@ -33,18 +35,72 @@ class GLError(HarnessError, RuntimeError):
     """An OpenGL context could not be created, or a pass left a GL error."""
 
 
+#: Names the EGL device to render on: an index (``0``, ``1``, ...), or ``default``
+#: for the EGL default display; unset, a hardware device is preferred to llvmpipe.
+DEVICE_ENV = "CAUSTICS_GL_DEVICE"
+
+#: What a GL timer query returns where it is not supported (llvmpipe).
+_INVALID_QUERY = 2**32 - 1
+
+#: EGL device indices tried when looking for hardware.
+_MAX_DEVICES = 8
+
+
+def _egl(device: int | None) -> moderngl.Context:
+    kwargs = {} if device is None else {"device_index": device}
+    return moderngl.create_standalone_context(backend="egl", require=430, **kwargs)
+
+
+def _is_software(ctx: moderngl.Context) -> bool:
+    return any(name in ctx.info.get("GL_RENDERER", "").lower()
+               for name in ("llvmpipe", "softpipe", "swrast"))
+
+
+@cache
+def _hardware_device() -> int | None:
+    """The first EGL device that is not a software rasteriser (NVIDIA's, where a
+    GPU is), or None. Looked up once per process."""
+    for index in range(_MAX_DEVICES):
+        try:
+            ctx = _egl(index)
+        except Exception:  # past the last device: glcontext raises plain Exception
+            return None
+        software = _is_software(ctx)
+        ctx.release()
+        if not software:
+            return index
+    return None
+
+
+def _device_choice() -> int | None:
+    value = os.environ.get(DEVICE_ENV, "").strip().lower()
+    if value in ("", "auto"):
+        return _hardware_device()
+    if value == "default":
+        return None
+    try:
+        return int(value)
+    except ValueError:
+        raise GLError(f"{DEVICE_ENV}={value}: expected an EGL device index, 'default' or "
+                      "'auto'") from None
+
+
 def create_context() -> moderngl.Context:
-    """A headless OpenGL 4.5 context through EGL (Mesa llvmpipe on CPU, NVIDIA on GPU).
+    """A headless OpenGL 4.5 context through EGL: on a hardware device (NVIDIA's
+    EGL device on a GPU machine) where one exists, else the default display (Mesa
+    llvmpipe on CPU). :data:`DEVICE_ENV` forces a device index or the default.
 
     Raises
     ------
     GLError
         When no EGL context of version 4.3 or newer can be created.
     """
+    device = _device_choice()
     try:
-        ctx = moderngl.create_standalone_context(backend="egl", require=430)
+        ctx = _egl(device)
     except Exception as error:  # moderngl raises plain Exception on EGL failures
-        raise GLError(f"cannot create a headless OpenGL 4.3 context: {error}") from error
+        where = "" if device is None else f" on EGL device {device}"
+        raise GLError(f"cannot create a headless OpenGL 4.3 context{where}: {error}") from error
     return ctx
 
 
@@ -117,14 +173,22 @@ class PassTimer:
 
     Each measured pass is also checked for GL errors (:class:`GLError` names it).
 
-    GL timer queries return 2^32 - 1 (invalid) on llvmpipe, so each pass is timed
-    on the CPU: ``ctx.finish()`` before and after, ``time.perf_counter()`` between.
-    The ``timer`` attribute names the clock for the result.
+    Each pass is timed on the CPU: ``ctx.finish()`` before and after,
+    ``time.perf_counter()`` between, so a pass's time includes the read-backs it
+    makes (the receiver maps), as the photon tracer's time includes its own. The
+    ``timer`` attribute names that clock. On a hardware device a GL timer query
+    (``GL_TIME_ELAPSED``) also times the GPU work of each pass alone, into
+    ``gpu_timings``; on llvmpipe those queries return 2^32 - 1 (invalid) and
+    ``gpu_timings`` stays empty.
     """
 
     ctx: moderngl.Context
     timings: dict[str, float] = field(default_factory=dict)
     timer: str = "ctx.finish + time.perf_counter"
+    gpu_timings: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.queries = not _is_software(self.ctx)
 
     def measure(self, name: str):
         """Context manager timing one pass under ``name``."""
@@ -137,12 +201,23 @@ class _Measure:
 
     def __enter__(self) -> None:
         self.timer.ctx.finish()
+        self.query = self.timer.ctx.query(time=True) if self.timer.queries else None
+        if self.query is not None:
+            self.query.__enter__()
         self.start = time.perf_counter()
 
     def __exit__(self, *exc) -> None:
+        if self.query is not None:
+            self.query.__exit__(*exc)
         self.timer.ctx.finish()
         elapsed = time.perf_counter() - self.start
         self.timer.timings[self.name] = self.timer.timings.get(self.name, 0.0) + elapsed
+        if self.query is not None:
+            nanoseconds = self.query.elapsed
+            self.query.release()
+            if 0 < nanoseconds < _INVALID_QUERY:
+                gpu = self.timer.gpu_timings
+                gpu[self.name] = gpu.get(self.name, 0.0) + nanoseconds * 1e-9
         error = self.timer.ctx.error
         if error != "GL_NO_ERROR" and exc[0] is None:
             raise GLError(f"pass {self.name} left {error}")

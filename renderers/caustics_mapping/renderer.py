@@ -146,7 +146,9 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
         receivers=tuple(ReceiverMap(m, g.extent)
                         for m, g in zip(acc.maps, geometry.receivers, strict=True)),
         effects=effects, timings=dict(timer.timings), timer=timer.timer,
-        metadata=metadata.as_dict(),
+        # GPU time per pass from GL timer queries, where they are valid (hardware).
+        metadata=metadata.as_dict() | ({"gpu_timings": dict(timer.gpu_timings)}
+                                       if timer.gpu_timings else {}),
     )
     caustic_total = acc.caustic_total
     if caustic_total is None:

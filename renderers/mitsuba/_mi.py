@@ -1,24 +1,32 @@
 """The one place that imports Mitsuba and Dr.Jit.
 
 :func:`renderers.mitsuba.llvm.configure_drjit` runs first, so Dr.Jit's LLVM backend finds
-the libLLVM it needs (>= 16) instead of guessing. The variant is ``llvm_ad_rgb``;
-``scalar_rgb`` is a recorded fallback (the camera image works, the vectorised
-photon tracer refuses to run on it: one photon per Python call is unusable).
+the libLLVM it needs (>= 16) instead of guessing. The variant is ``cuda_ad_rgb`` where
+Dr.Jit finds a CUDA device, else ``llvm_ad_rgb``; the environment variable
+:data:`VARIANT_ENV` forces one (``CAUSTICS_MITSUBA_VARIANT=llvm_ad_rgb`` keeps a GPU
+machine on the CPU). ``scalar_rgb`` is a recorded fallback (the camera image works,
+the vectorised photon tracer refuses to run on it: one photon per Python call is
+unusable). The variant is part of every reference's cache key.
 """
 
 from __future__ import annotations
 
 import functools
+import os
 from types import ModuleType
 
 from renderers.mitsuba.bsdf import register
 from renderers.mitsuba.llvm import configure_drjit
 from scenes.errors import HarnessError
 
-__all__ = ["FALLBACK_VARIANT", "PREFERRED_VARIANT", "MitsubaError", "load", "versions"]
+__all__ = ["CUDA_VARIANT", "FALLBACK_VARIANT", "PREFERRED_VARIANT", "VARIANT_ENV",
+           "MitsubaError", "load", "versions"]
 
 PREFERRED_VARIANT = "llvm_ad_rgb"
+CUDA_VARIANT = "cuda_ad_rgb"
 FALLBACK_VARIANT = "scalar_rgb"
+#: Names the Mitsuba variant to use, overriding the choice by device.
+VARIANT_ENV = "CAUSTICS_MITSUBA_VARIANT"
 
 
 class MitsubaError(HarnessError, RuntimeError):
@@ -34,15 +42,35 @@ def load() -> tuple[ModuleType, ModuleType, str]:
     import drjit as dr  # noqa: PLC0415 - heavy; needs DRJIT_LIBLLVM_PATH set first
     import mitsuba as mi  # noqa: PLC0415 - heavy; needs DRJIT_LIBLLVM_PATH set first
 
-    try:
-        mi.set_variant(PREFERRED_VARIANT)
-        variant = PREFERRED_VARIANT
-    except (ImportError, AttributeError, RuntimeError):
-        mi.set_variant(FALLBACK_VARIANT)
-        variant = FALLBACK_VARIANT
+    forced = os.environ.get(VARIANT_ENV, "").strip()
+    if forced:
+        try:
+            mi.set_variant(forced)
+        except (ImportError, AttributeError, RuntimeError, ValueError) as error:
+            raise MitsubaError(f"{VARIANT_ENV}={forced}: Mitsuba cannot use this variant "
+                               f"here ({error}); available: {', '.join(mi.variants())}"
+                               ) from error
+        variant = forced
+    else:
+        variant = _by_device(mi, dr)
 
     register(mi, dr)
     return mi, dr, variant
+
+
+def _by_device(mi, dr) -> str:
+    """``cuda_ad_rgb`` where Dr.Jit has a CUDA device, else ``llvm_ad_rgb``, else the
+    scalar fallback."""
+    candidates = [PREFERRED_VARIANT, FALLBACK_VARIANT]
+    if CUDA_VARIANT in mi.variants() and dr.has_backend(dr.JitBackend.CUDA):
+        candidates.insert(0, CUDA_VARIANT)
+    for variant in candidates:
+        try:
+            mi.set_variant(variant)
+        except (ImportError, AttributeError, RuntimeError):
+            continue
+        return variant
+    raise MitsubaError(f"none of the Mitsuba variants {candidates} loads here")
 
 
 def versions() -> dict[str, str]:

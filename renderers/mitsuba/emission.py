@@ -159,10 +159,16 @@ def stratified_square(rng, n: int):
     (see the module docstring).
     """
     mi, dr, _ = _mi.load()
-    s = 1 << (max(int(n), 1).bit_length() - 1) // 2  # largest power of 2 with s^2 <= n
-    swept = (n // (s * s)) * s * s
+    side = 1 << (max(int(n), 1).bit_length() - 1) // 2  # largest power of 2, side^2 <= n
+    # Every value that depends on n enters as an opaque variable, not a literal:
+    # one compiled kernel then serves every launch size (the cost study times
+    # budgets from 1/256 to 1/4 of the reference's, and must not time a compile
+    # for each).
+    s = dr.opaque(mi.Float, side)
+    mask = dr.opaque(mi.UInt32, side * side - 1)
+    swept = dr.opaque(mi.UInt32, (n // (side * side)) * side * side)
     lane = dr.arange(mi.UInt32, n)
-    cell = lane & (s * s - 1)
+    cell = lane & mask
     x, y = _morton_compact(cell), _morton_compact(cell >> 1)
     ju, jv = rng.next_float32(), rng.next_float32()
     strat = lane < swept
