@@ -538,6 +538,103 @@ class SceneInfo:
         return []
 
 
+# ------------------------------------------------------------------------- animation
+
+
+_ZERO3: Vec3 = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class LightMotion:
+    """Motion of the light over the animation, as a function of the time τ (s)
+    since the scene as written (``scenes.animation``)."""
+
+    section: ClassVar[str] = "`[animation.light]`"
+    velocity: Vec3 = spec(
+        _ZERO3, doc="Velocity of the light's position (point, spot) or centre (area): "
+        "p(τ) = p + v τ. A directional light has no position: must be zero.", unit="m/s",
+    )
+    angular_velocity: Vec3 = spec(
+        _ZERO3, doc="Rate of the rotation angles of the light's direction (spot, "
+        "directional) or normal (area): the direction is rotated by the angles ω τ about x, "
+        "then y, then z (as `transform.rotate`). A point light has no direction: must be "
+        "zero.", unit="deg/s",
+    )
+
+
+@dataclass(frozen=True)
+class ObjectMotion:
+    """Motion of one caustic object over the animation."""
+
+    section: ClassVar[str] = "`[[animation.objects]]`"
+    index: int = spec(doc="The object that moves: its index in `[[objects]]` (0 = first).",
+                      ge=0)
+    velocity: Vec3 = spec(
+        _ZERO3, doc="Translation rate: the centre (sphere, water surface, ring) or the "
+        "transform's `translate` (mesh) moves by v τ.", unit="m/s",
+    )
+    angular_velocity: Vec3 = spec(
+        _ZERO3, doc="Rotation rate: a mesh's `transform.rotate` angles grow by ω τ (a spin "
+        "about the mesh's own origin, its bounding-box centre with `fit_size`); a ring's "
+        "axis is rotated by the angles ω τ about its centre. A sphere and a water surface "
+        "have no orientation to turn: must be zero.", unit="deg/s",
+    )
+
+
+#: Object kinds that have no orientation an angular velocity could turn.
+_UNROTATABLE = {"sphere": "a sphere has no orientation to turn (its tessellation is fixed)",
+                "water_surface": "a water surface's grid stays aligned with x and y"}
+
+
+@dataclass(frozen=True)
+class Animation:
+    """An animated scene: ``frames`` frames at ``fps``. Frame i is the scene at
+    τ_i = start + i / fps seconds after the scene as written: every water surface at
+    its ``time`` + τ_i (waves travel, plops spread), the light and the objects of
+    ``objects`` moved by their velocities. ``caustics compare --studies temporal``
+    renders the frames on both sides."""
+
+    section: ClassVar[str] = "`[animation]`"
+    frames: int = spec(24, doc="Frames in the sequence (`--frames` overrides it).",
+                       ge=2, le=10_000)
+    fps: float = spec(30.0, doc="Frames per second: frame i is at τ = start + i / fps.",
+                      unit="1/s", gt=0, le=10_000)
+    start: float = spec(0.0, doc="τ of the first frame, after the scene as written.",
+                        unit="s")
+    light: LightMotion = spec(LightMotion(), doc="Motion of the light.")
+    objects: tuple[ObjectMotion, ...] = spec((), doc="Motions of caustic objects.")
+
+    def validate(self) -> list[tuple[str, str]]:
+        problems, seen = [], {}
+        for k, motion in enumerate(self.objects):
+            if motion.index in seen:
+                problems.append((f"objects[{k}].index", f"object {motion.index} already "
+                                 f"moves in animation.objects[{seen[motion.index]}]"))
+            seen.setdefault(motion.index, k)
+        return problems
+
+    def scene_problems(self, scene: Scene) -> list[tuple[str, str]]:
+        """(path under ``animation``, message) for motions the scene cannot take."""
+        problems = []
+        kind = type(scene.light).kind
+        if kind == "directional" and any(self.light.velocity):
+            problems.append(("light.velocity", "must be zero: a directional light has "
+                             "no position to move (turn it with angular_velocity)"))
+        if kind == "point" and any(self.light.angular_velocity):
+            problems.append(("light.angular_velocity", "must be zero: a point light has "
+                             "no direction to turn (move it with velocity)"))
+        for k, motion in enumerate(self.objects):
+            if motion.index >= len(scene.objects):
+                problems.append((f"objects[{k}].index", f"must name an object: the scene "
+                                 f"has {len(scene.objects)} (0 to {len(scene.objects) - 1})"))
+                continue
+            target = type(scene.objects[motion.index]).kind
+            if any(motion.angular_velocity) and target in _UNROTATABLE:
+                problems.append((f"objects[{k}].angular_velocity",
+                                 f"must be zero: {_UNROTATABLE[target]}"))
+        return problems
+
+
 @dataclass(frozen=True)
 class Scene:
     """A whole scene file."""
@@ -549,6 +646,11 @@ class Scene:
     objects: tuple[CausticObject, ...] = spec(doc="Caustic-forming objects.")
     camera: Camera = spec(doc="The camera.")
     settings: Settings = spec(Settings(), doc="Renderer settings.")
+    animation: Animation | None = spec(
+        None, doc="How the scene moves over a sequence of frames (the temporal study); "
+        "none: a still scene (the temporal study then animates only its water surfaces' "
+        "time).",
+    )
     source: str = spec("", doc="Path of the file the scene was read from.", internal=True)
 
     def validate(self) -> list[tuple[str, str]]:
@@ -557,6 +659,9 @@ class Scene:
             problems.append(("receivers", "needs at least one receiver"))
         if not self.objects:
             problems.append(("objects", "needs at least one caustic object"))
+        if self.animation is not None:
+            problems += [(f"animation.{path}", message)
+                         for path, message in self.animation.scene_problems(self)]
         return problems + precision_problems(self)
 
     @property

@@ -2,15 +2,22 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import matplotlib.pyplot as plt
 
 from harness.figures.common import FigureContext, receiver_scores, shared_white, show
 from harness.studies.runner import frame_seconds
+from harness.studies.temporal import TemporalOptions, temporal_study
+from renderers.caustics_mapping import create_context
+from renderers.methods import load_method
 from reports.records import Table
+from reports.temporal_plots import strip_indices
 
-FRAME_TIMES = (0.4, 0.9, 1.4)
+#: Presets compared in the animation, and the frames of a quick run.
+PRESETS = ("paper", "strong")
+QUICK_FRAMES = 6
+#: Per-frame columns of fig08.csv (from ``temporal.csv``).
+_TEMPORAL = ("relmse_caustic", "relmse_caustic_floor", "flicker_caustic",
+             "flicker_caustic_floor", "method_ms")
 
 
 #: Receiver scores tabulated per row, in column order.
@@ -41,27 +48,67 @@ def figure_05(ctx: FigureContext):
 
 
 def figure_08(ctx: FigureContext):
-    """Fig. 8: frames of the water animation: a plop spreads over the waves."""
+    """Fig. 8: the water animation as a frame strip (each preset over the reference)
+    above the flicker of every frame pair (``harness.studies.temporal``: the reference
+    with common random numbers, its independent twin the noise floor)."""
 
     base = ctx.scene("water_pool")
-    fig, axes = plt.subplots(2, len(FRAME_TIMES), figsize=(3 * len(FRAME_TIMES), 6.2))
+    frames = QUICK_FRAMES if ctx.quick else base.animation.frames
+    results = {}
+    gl = create_context()
+    try:
+        for preset in PRESETS:
+            method = load_method(preset)
+            scene = method.configure(base)
+            results[preset] = temporal_study(scene, method, ctx=gl, options=TemporalOptions(
+                frames=frames, cache=ctx.cache))
+    finally:
+        gl.release()
+    reference = results[PRESETS[0]]
+    picks = strip_indices(reference.frames, 4)
+    fig = plt.figure(figsize=(2.1 * len(picks), 8.4))
+    grid = fig.add_gridspec(4, len(picks), height_ratios=(1, 1, 1, 1.1))
+    rows_shown = [(f"{p} preset", results[p].method) for p in PRESETS]
+    rows_shown.append(("reference", reference.reference))
+    for column, index in enumerate(picks):
+        for row, (name, sequence) in enumerate(rows_shown):
+            ax = fig.add_subplot(grid[row, column])
+            show(ax, sequence[index], white=reference.white, receiver=True,
+                 title=f"τ = {reference.times[index]:.3f} s\n{name}" if row == 0 else name)
+    ax = fig.add_subplot(grid[3, :])
     rows = []
-    for j, t in enumerate(FRAME_TIMES):
-        water = dataclasses.replace(base.objects[0], time=t)
-        scene = dataclasses.replace(base, objects=(water,))
-        ref, method = ctx.reference(scene), ctx.realtime(scene)
-        reference = ref.receivers[0].irradiance
-        white = shared_white(reference)
-        scores = receiver_scores(method.receivers[0].irradiance, reference)
-        ms = frame_seconds(method.timings) * 1e3
-        show(axes[0, j], method.receivers[0].irradiance, white=white, receiver=True,
-             title=f"t = {t:g} s: caustics mapping ({ms:.1f} ms)")
-        show(axes[1, j], reference, white=white, receiver=True,
-             title=f"reference, relMSE {scores['relmse']:.3g}")
-        rows.append({"time_s": t, **{k: scores[k] for k in _SCORES}, "frame_ms": ms})
-    table = Table.from_records(("time_s", *_SCORES, "frame_ms"), rows)
-    caption = ("Fig. 8 analogue: pool floor under an animated surface (100x100 vertices, "
-               "single refraction, sun). " + "; ".join(
-                   f"t={r['time_s']:g} s: relMSE {r['relmse']:.3g}, flux ratio "
-                   f"{r['flux_ratio']:.3f}, {r['frame_ms']:.1f} ms" for r in rows))
-    return ctx.save("fig08", fig, caption=caption, table=table)
+    for preset in PRESETS:
+        records = results[preset].table.records()
+        ax.plot([r["time_s"] for r in records[1:]], [r["flicker_caustic"] for r in records[1:]],
+                "-o", ms=2.5, label=f"{preset}")
+        for r in records:
+            rows.append({"preset": preset, "frame": r["frame"], "time_s": r["time_s"],
+                         **{k: r[k] for k in _TEMPORAL}})
+    floor = reference.table.records()
+    ax.plot([r["time_s"] for r in floor[1:]], [r["flicker_caustic_floor"] for r in floor[1:]],
+            "--", color="0.5", label="noise floor (independent reference)")
+    ax.set_yscale("log")
+    ax.set_xlabel("τ (s)")
+    ax.set_ylabel("flicker F_t (caustic region)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    summary = {p: {"flicker": results[p].summary["flicker"],
+                   "hf_energy_ratio": results[p].summary["hf_energy_ratio"],
+                   "method_frame_time_ms": results[p].summary["method"]["frame_time_ms"],
+                   "run_time_s": results[p].summary["run_time_s"]} for p in PRESETS}
+    flicker = {p: summary[p]["flicker"]["caustic"] for p in PRESETS}
+    steadier = min(PRESETS, key=lambda p: flicker[p]["value"])
+    other = next(p for p in PRESETS if p != steadier)
+    ratio = flicker[other]["value"] / flicker[steadier]["value"]
+    caption = (f"Fig. 8 analogue: {reference.frames} frames of the pool floor under the "
+               f"animated surface at {reference.fps:g} fps (100x100 vertices, single "
+               "refraction, sun), caustics mapping over the reference, and the flicker F of "
+               "every frame pair (relMSE of the frame-to-frame differences). " + "; ".join(
+                   f"{p}: F {flicker[p]['value']:.3g} (noise floor "
+                   f"{flicker[p]['noise_floor']:.3g}, excess {flicker[p]['excess']:.3g})"
+                   for p in PRESETS)
+               + f". {steadier} flickers least: {other}'s flicker is {ratio:.2f}x its own.")
+    table = Table.from_records(("preset", "frame", "time_s", *_TEMPORAL), rows)
+    return ctx.save("fig08", fig, caption=caption, table=table,
+                    data={"presets": summary, "steadier": steadier,
+                          "frames": reference.frames, "fps": reference.fps})

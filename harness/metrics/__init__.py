@@ -1,4 +1,5 @@
-"""Image metrics: differences, relMSE, PSNR, SSIM (tone-mapped), HDR-FLIP, flux ratio."""
+"""Image metrics: differences, relMSE, PSNR, SSIM (tone-mapped), HDR-FLIP, flux ratio;
+over time (``temporal``): flicker and temporal high-frequency energy."""
 
 from harness.metrics.differences import (
     absolute_difference,
@@ -13,20 +14,36 @@ from harness.metrics.scores import (
     relative_mse,
     structural_similarity,
 )
+from harness.metrics.temporal import (
+    flicker_map,
+    flicker_series,
+    frame_differences,
+    high_frequency_energy,
+    high_frequency_energy_ratio,
+    high_frequency_energy_ratio_map,
+    temporal_flicker,
+)
 from reports.display import false_colour, luminance, tonemap, white_point
 
 __all__ = [
     "MetricInputError",
     "absolute_difference",
     "false_colour",
+    "flicker_map",
+    "flicker_series",
     "flip_error",
     "flux_ratio",
+    "frame_differences",
+    "high_frequency_energy",
+    "high_frequency_energy_ratio",
+    "high_frequency_energy_ratio_map",
     "luminance",
     "peak_signal_to_noise_ratio",
     "relative_difference",
     "relative_mse",
     "signed_difference",
     "structural_similarity",
+    "temporal_flicker",
     "tonemap",
     "white_point",
 ]

@@ -116,6 +116,9 @@ def cache_key(scene: Scene, versions: dict[str, str]) -> str:
     fields = _jsonable(dataclasses.replace(scene, source=""))
     for name in NON_PHYSICAL:
         fields["info"].pop(name, None)
+    # ``[animation]`` says how the scene moves over a sequence; a reference renders one
+    # frame, whose physics is the scene itself (``scenes.animation``): keys unchanged.
+    fields.pop("animation", None)
     fields["settings"] = {k: fields["settings"][k] for k in REFERENCE_SETTINGS}
     digest = hashlib.sha256()
     digest.update(json.dumps({"scene": fields, "versions": versions,
