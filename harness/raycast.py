@@ -3,6 +3,9 @@
 The convergence tables compare each estimator's hit distance with the exact distance
 along the same ray (v, r) to the receivers; this module provides that exact distance
 from the very triangles both renderers were given (``scenes.geometry``).
+:class:`SurfaceTracer` also returns what a light path needs at each hit (the shape,
+its shading and geometric normals), on the reference's own Mitsuba scene, for the
+exact light paths of the error decomposition (``harness.studies.exact_paths``).
 """
 
 from __future__ import annotations
@@ -10,9 +13,11 @@ from __future__ import annotations
 import numpy as np
 
 from renderers.mitsuba._mi import load
-from scenes.geometry import SceneGeometry, TriangleMesh
+from renderers.mitsuba.exporter import export_scene
+from scenes.geometry import SceneGeometry, TriangleMesh, build_geometry
+from scenes.model import Scene
 
-__all__ = ["RayHits", "ReceiverTracer", "cast_rays"]
+__all__ = ["RayHits", "ReceiverTracer", "SurfaceHits", "SurfaceTracer", "cast_rays"]
 
 
 def _mitsuba():
@@ -89,6 +94,106 @@ class ReceiverTracer(MeshTracer):
 
     def __init__(self, geometry: SceneGeometry):
         super().__init__([rec.mesh for rec in geometry.receivers])
+
+
+class SurfaceHits:
+    """Nearest surface hits of a batch of rays, with what a specular event needs.
+
+    Attributes
+    ----------
+    distance : ndarray (N,), float64
+        Distance along the unit direction, metres; ``inf`` where nothing is hit.
+    kind : ndarray (N,), int
+        :data:`SurfaceTracer.NONE`, :data:`SurfaceTracer.RECEIVER` or
+        :data:`SurfaceTracer.OBJECT`.
+    index : ndarray (N,), int
+        Index into ``scene.receivers`` or ``scene.objects`` (by ``kind``), −1 for none.
+    position : ndarray (N, 3), float64
+        Hit points (Mitsuba's, float32 precision), metres; zeros where nothing is hit.
+    shading_normal, geometric_normal : ndarray (N, 3), float64
+        Unit normals at the hit: the interpolated vertex normal (the meshes' own, as
+        both renderers shade with) and the triangle's; zeros where nothing is hit.
+    """
+
+    def __init__(self, distance, kind, index, position, *, shading_normal, geometric_normal):
+        self.distance = distance
+        self.kind = kind
+        self.index = index
+        self.position = position
+        self.shading_normal = shading_normal
+        self.geometric_normal = geometric_normal
+
+
+class SurfaceTracer:
+    """Nearest hits on the reference's own Mitsuba scene (``export_scene``: the same
+    triangles and vertex normals both renderers use): ``tracer(origins, directions,
+    leaving=None) -> SurfaceHits``.
+
+    Parameters
+    ----------
+    scene : Scene
+    geometry : SceneGeometry, optional
+    objects : bool
+        Include the caustic objects (False: the receivers alone).
+    """
+
+    NONE, RECEIVER, OBJECT = 0, 1, 2
+
+    def __init__(self, scene: Scene, geometry: SceneGeometry | None = None, *,
+                 objects: bool = True):
+        mi, dr, _ = load()
+        self._mi, self._dr = mi, dr
+        exported = export_scene(scene, geometry=geometry or build_geometry(scene),
+                                include_objects=objects)
+        self._scene = exported.scene
+        self._ids = {int(i): (self.RECEIVER, k) for k, i in enumerate(exported.receiver_ids)}
+        self._ids |= {int(i): (self.OBJECT, k) for k, i in enumerate(exported.object_ids)}
+
+    def __call__(self, origins, directions, *, leaving=None) -> SurfaceHits:
+        """Cast rays from ``origins`` (N, 3) along ``directions`` (N, 3), metres.
+
+        ``leaving`` (N, 3): the geometric normals of the surfaces the rays leave; each
+        origin is then moved off its surface as Mitsuba's
+        ``SurfaceInteraction3f.spawn_ray`` does (the reference photon tracer's rule),
+        so a ray does not hit the surface it starts on. Directions are normalised here.
+        """
+        mi, dr = self._mi, self._dr
+        o = np.asarray(origins, np.float64).reshape(-1, 3)
+        d = np.asarray(directions, np.float64).reshape(-1, 3)
+        n = len(o)
+        if n == 0:  # Dr.Jit aborts on zero-sized launches
+            z3 = np.zeros((0, 3))
+            return SurfaceHits(np.zeros(0), np.zeros(0, int), np.zeros(0, int), z3,
+                               shading_normal=z3, geometric_normal=z3)
+        d = d / np.linalg.norm(d, axis=1, keepdims=True)
+        direction = mi.Vector3f(d.T.astype(np.float32))
+        if leaving is None:
+            ray = mi.Ray3f(mi.Point3f(o.T.astype(np.float32)), direction)
+        else:
+            start = dr.zeros(mi.SurfaceInteraction3f, n)
+            start.p = mi.Point3f(o.T.astype(np.float32))
+            start.n = mi.Normal3f(np.asarray(leaving, np.float64).reshape(-1, 3).T
+                                  .astype(np.float32))
+            ray = start.spawn_ray(direction)
+        si = self._scene.ray_intersect(ray)
+        valid, shape = si.is_valid(), dr.reinterpret_array(mi.UInt32, si.shape)
+        dr.eval(valid, shape, si.t, si.p, si.n, si.sh_frame.n)  # one kernel for all fields
+        valid, shape = np.asarray(valid, bool), np.asarray(shape, np.int64)
+        kind = np.zeros(n, int)
+        index = np.full(n, -1)
+        for sid, (k, i) in self._ids.items():
+            here = valid & (shape == sid)
+            kind[here], index[here] = k, i
+        hit = kind != self.NONE
+        distance = np.where(hit, np.asarray(si.t, np.float64), np.inf)
+
+        def field(values) -> np.ndarray:
+            xyz = np.stack([np.asarray(c, np.float64) for c in (values.x, values.y, values.z)],
+                           axis=1)
+            return np.where(hit[:, None], xyz, 0.0)
+
+        return SurfaceHits(distance, kind, index, field(si.p),
+                           shading_normal=field(si.sh_frame.n), geometric_normal=field(si.n))
 
 
 def cast_rays(geometry: SceneGeometry, origins, directions) -> RayHits:
