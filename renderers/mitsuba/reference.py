@@ -39,8 +39,15 @@ from scenes import effects_of
 from scenes.geometry import build_geometry
 from scenes.model import Scene
 
-__all__ = ["CUT_WARNING", "CutFluxWarning", "ReceiverEstimate", "estimate_receivers",
-           "render_reference"]
+__all__ = [
+    "CUT_WARNING",
+    "CutFluxWarning",
+    "ReceiverEstimate",
+    "cut_fraction",
+    "estimate_receivers",
+    "reference_metadata",
+    "render_reference",
+]
 
 TIMER = "time.perf_counter (wall clock, includes JIT compilation)"
 
@@ -97,7 +104,7 @@ class ReceiverEstimate:
 CUT_WARNING = 1e-4
 
 
-def _cut_fraction(emitted: np.ndarray, cut: np.ndarray) -> float:
+def cut_fraction(emitted: np.ndarray, cut: np.ndarray) -> float:
     """max over RGB of cut / emitted flux (0 where nothing was emitted)."""
     fractions = np.divide(cut, emitted, out=np.zeros(3), where=emitted > 0)
     return float(fractions.max())
@@ -179,13 +186,49 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
             if np.isfinite(noise) and noise <= target:
                 stopped = "target_noise"
                 break
-    cut_fraction = _cut_fraction(emitted, cut)
-    _warn_cut(scene, cut_fraction, "emitted caustic flux")
+    cut = cut_fraction(emitted, cut)
+    _warn_cut(scene, cut, "emitted caustic flux")
     return ReceiverEstimate(maps=None if caustic_only else tuple(maps), caustic=tuple(caustic),
                             photons=traced, relative_noise=noise, stopped_by=stopped,
                             history=tuple(history), seeds=k, seed=first,
                             channel_passes=len(tracer.channels),
-                            cut_fraction=cut_fraction)
+                            cut_fraction=cut)
+
+
+def reference_metadata(scene: Scene, *, key: str, versions: dict, photons: int,
+                       channel_passes: int, relative_noise: float, stopped_by: str,
+                       history, cut_fraction: float, camera_cut: float,
+                       camera_variance: np.ndarray) -> dict:
+    """A reference's ``metadata`` (``result.json``): what was traced and how, with
+    ``hash`` = ``key``. ``history`` holds (photons, noise, seconds) per round;
+    ``camera_cut`` is :func:`.camera.camera_cut_fraction`'s share."""
+    s = scene.settings
+    return {
+        "hash": key,
+        "variant": versions["variant"],
+        "versions": versions,
+        "photons": photons,
+        "photon_budget": s.photons,
+        "channel_passes": channel_passes,
+        "spp": s.spp,
+        "seed": s.seed,
+        "seeds": s.seeds,
+        "relative_noise": relative_noise,
+        "target_noise": s.target_noise,
+        "stopped_by": stopped_by,
+        "noise_history": [list(h) for h in history],
+        "event_chains": event_chains_counted(scene),
+        "cut_flux_fraction": cut_fraction,
+        "max_specular_events": MAX_SPECULAR_EVENTS,
+        "camera_max_depth": camera_max_depth(scene),
+        # Share of the camera image's light on paths past the cap, measured by one
+        # seed rendered again with twice the cap (camera.camera_cut_fraction).
+        "camera_cut_fraction": camera_cut,
+        "camera_integrator": "ptracer",
+        "camera_limits": list(CAMERA_LIMITS),
+        "scene": scene.name,
+        "camera_variance": camera_variance.astype(np.float32),
+    }
 
 
 def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> RenderResult:
@@ -213,32 +256,11 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> Render
     if s.all_specular_paths:
         timings["camera_cut_probe"] = time.perf_counter() - start
     _warn_cut(scene, camera_cut, "camera image")
-    metadata = {
-        "hash": key,
-        "variant": versions["variant"],
-        "versions": versions,
-        "photons": est.photons,
-        "photon_budget": s.photons,
-        "channel_passes": est.channel_passes,
-        "spp": s.spp,
-        "seed": s.seed,
-        "seeds": s.seeds,
-        "relative_noise": est.relative_noise,
-        "target_noise": s.target_noise,
-        "stopped_by": est.stopped_by,
-        "noise_history": [list(h) for h in est.history],
-        "event_chains": event_chains_counted(scene),
-        "cut_flux_fraction": est.cut_fraction,
-        "max_specular_events": MAX_SPECULAR_EVENTS,
-        "camera_max_depth": camera_max_depth(scene),
-        # Share of the camera image's light on paths past the cap, measured by one
-        # seed rendered again with twice the cap (camera.camera_cut_fraction).
-        "camera_cut_fraction": camera_cut,
-        "camera_integrator": "ptracer",
-        "camera_limits": list(CAMERA_LIMITS),
-        "scene": scene.name,
-        "camera_variance": camera_var.astype(np.float32),
-    }
+    metadata = reference_metadata(
+        scene, key=key, versions=versions, photons=est.photons,
+        channel_passes=est.channel_passes, relative_noise=est.relative_noise,
+        stopped_by=est.stopped_by, history=est.history, cut_fraction=est.cut_fraction,
+        camera_cut=camera_cut, camera_variance=camera_var)
     return RenderResult(
         renderer="mitsuba", camera=camera.astype(np.float32), receivers=tuple(est.caustic),
         effects=effects_of(scene), timings=timings, timer=TIMER, metadata=metadata,
