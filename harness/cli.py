@@ -115,6 +115,17 @@ def _cache_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
+def _frame_count(text: str) -> int:
+    """``--frames``: an integer of at least 2 (a sequence needs one frame pair)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"must be at least 2, got {value}")
+    return value
+
+
 def _compare_command(subparsers) -> None:
     p = _command(subparsers, "compare", "harness.commands.compare:compare",
                  "render both ways, compare, write data files and an HTML report",
@@ -122,7 +133,15 @@ def _compare_command(subparsers) -> None:
     p.add_argument("scenes", nargs="*", metavar="SCENE", help=_SCENES_HELP)
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     p.add_argument("--studies", metavar="LIST",
-                   help="comma-separated: metrics,convergence,cost (default: all)")
+                   help="comma-separated: metrics,convergence,cost,temporal,decomposition "
+                   "(default: metrics,convergence,cost; temporal renders the scene's "
+                   "[animation] frame by frame on both sides and writes temporal.csv, the "
+                   "flicker metrics and an animation; decomposition traces exact light paths "
+                   "and swaps in the method's approximations one at a time, writing "
+                   "decomposition.csv and a waterfall)")
+    p.add_argument("--frames", type=_frame_count, metavar="N",
+                   help="frames of the temporal study, at least 2 (default: the scene's "
+                   "[animation] frames, else 24)")
     p.add_argument("--quick", action="store_true",
                    help="smaller sweeps, one timing repeat, at most 4 iterations")
     p.add_argument("--max-iterations", type=int, default=8, metavar="N",
@@ -139,12 +158,13 @@ def _compare_command(subparsers) -> None:
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="override any setting (repeatable)")
     p.add_argument("--thresholds", metavar="FILE",
-                   help="accuracy bounds (default: the bundled bounds); checked at the "
-                   "golden settings against the golden references, for bundled scenes only")
+                   help="regression locks (default: the bundled ones); checked at the "
+                   "golden settings against the golden references, for bundled scenes only; "
+                   "physical requirements and method targets are checked as well")
     p.add_argument("--golden", metavar="DIR",
                    help="golden references the bounds hold against (default: the bundled ones)")
     p.add_argument("--fail-on-thresholds", action="store_true",
-                   help="exit 3 when a bound fails")
+                   help="exit 3 when an accuracy check fails (a known gap does not)")
     p.add_argument("--self-contained", action="store_true",
                    help="embed images, plots, scripts in one HTML file per page")
     p.add_argument("--crosscheck", choices=("luxcore",),
@@ -184,6 +204,40 @@ def _crosscheck_command(subparsers) -> None:
                    help="exit 3 when a comparison misses its tolerance")
 
 
+def _sweep_command(subparsers) -> None:
+    p = _command(subparsers, "sweep", "harness.commands.sweep:sweep",
+                 "run a sweep (scenes x methods x settings x reference seeds) on Dask: "
+                 "results.csv, an index of error against cost, a page per row",
+                 output_dir=True)
+    p.add_argument("sweep", metavar="SWEEP",
+                   help="a sweep file (TOML, one [sweep] table) or a bundled sweep's name "
+                   "(estimators)")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="an existing Dask scheduler, e.g. tcp://host:8786 (default: "
+                       "$DASK_SCHEDULER_ADDRESS, else a local cluster)")
+    where.add_argument("--scheduler-file", metavar="PATH",
+                       help="the file `dask scheduler --scheduler-file PATH` wrote")
+    where.add_argument("--in-process", action="store_true",
+                       help="a Dask cluster of one worker thread inside this process, no "
+                       "other process (debugging)")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="process workers of the local cluster (default: one per core)")
+    p.add_argument("--connect-timeout", type=float, default=60.0, metavar="S",
+                   help="seconds to wait for an existing scheduler to answer, and again "
+                   "for its first worker (default %(default)s)")
+    p.add_argument("--dry-run", action="store_true",
+                   help="validate the sweep file, print the rows and their keys, run nothing")
+    p.add_argument("--cache-dir", metavar="DIR",
+                   help="cache root: the references, and the sweep's rows under "
+                   "sweep-results/ (default $CAUSTICS_CACHE_DIR or "
+                   "~/.cache/caustics-harness/reference)")
+    p.add_argument("--no-cache", action="store_true",
+                   help="compute every reference and row; read and write neither cache")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+
+
 def _check_commands(subparsers) -> None:
     p = _command(subparsers, "golden", "harness.commands.checks:golden",
                  "check (or --regenerate) the golden references")
@@ -191,11 +245,12 @@ def _check_commands(subparsers) -> None:
     p.add_argument("--regenerate", action="store_true",
                    help="re-render into a staging folder and swap it in atomically")
     p = _command(subparsers, "calibrate", "harness.commands.checks:calibrate",
-                 "set accuracy bounds from measured spread")
+                 "set the regression locks from measured spread (they guard against "
+                 "change, not accuracy)")
     p.add_argument("--golden", help="golden folder (default: the bundled one)")
     p.add_argument("--extra", type=int, default=3,
                    help="independent references beyond the golden one (default 3)")
-    p.add_argument("-o", "--output", help="thresholds file (default: the bundled one)")
+    p.add_argument("-o", "--output", help="locks file (default: the bundled one)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -211,7 +266,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="print the traceback of an internal error (also CAUSTICS_DEBUG=1)")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for group in (_scene_commands, _render_commands, _compare_command, _figures_command,
-                  _crosscheck_command, _check_commands):
+                  _crosscheck_command, _check_commands, _sweep_command):
         group(subparsers)
     return parser
 

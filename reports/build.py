@@ -34,8 +34,17 @@ import numpy as np
 from markupsafe import Markup
 
 from reports import plots
+from reports.decomposition import decomposition_section
 from reports.panels import Assets, hdr_script, thumbnails, view_panels, views
-from reports.records import METRIC_FORMULAS, SceneComparison, SceneFailure, Table
+from reports.records import (
+    CHECK_KIND_MEANING,
+    CHECK_KINDS,
+    METRIC_FORMULAS,
+    SceneComparison,
+    SceneFailure,
+    Table,
+)
+from reports.temporal import temporal_index, temporal_script, temporal_section
 from scenes.effects import EFFECTS
 from scenes.files import atomic_write_bytes, jsonable
 
@@ -157,7 +166,8 @@ def _plot_panels(comparison: SceneComparison, assets: Assets) -> dict[str, str |
         out["convergence"] = assets.add("convergence.svg", svg, mime="image/svg+xml")
     if comparison.cost is not None and comparison.cost.rows:
         svg = plots.figure_bytes(plots.cost_figure(
-            comparison.cost, speedup=comparison.speedup, point=comparison.speedup_point))
+            comparison.cost, speedup=comparison.speedup, point=comparison.speedup_point,
+            cold=comparison.speedup_cold))
         out["cost"] = assets.add("cost_accuracy.svg", svg, mime="image/svg+xml")
     return out
 
@@ -176,10 +186,22 @@ def _file_links(comparison: SceneComparison, folder: Path) -> list[dict[str, Any
     return links
 
 
-def _thresholds_summary(comparison: SceneComparison) -> dict[str, int]:
-    passed = sum(1 for t in comparison.thresholds if t.passed)
-    return {"passed": passed, "failed": len(comparison.thresholds) - passed,
-            "total": len(comparison.thresholds)}
+def _thresholds_summary(comparison: SceneComparison) -> dict[str, Any]:
+    """Counts over all checks (``failed`` excludes known gaps) and per kind:
+    ``kinds`` lists (kind, meaning, checks of that kind, counts) in
+    :data:`CHECK_KINDS` order."""
+    checks = comparison.thresholds
+    failed = sum(1 for t in checks if t.outcome == "FAIL")
+    kinds = []
+    for kind in CHECK_KINDS:
+        mine = [t for t in checks if t.category == kind]
+        counts = {o: sum(1 for t in mine if t.outcome == o)
+                  for o in ("pass", "FAIL", "known gap", "gap closed")}
+        kinds.append({"kind": kind, "meaning": CHECK_KIND_MEANING[kind], "checks": mine,
+                      "total": len(mine), **counts})
+    return {"passed": sum(1 for t in checks if t.passed), "failed": failed,
+            "gaps": sum(1 for t in checks if t.outcome == "known gap"),
+            "total": len(checks), "kinds": kinds}
 
 
 def _flux_budget(comparison: SceneComparison | SceneFailure) -> dict[str, Any] | None:
@@ -221,6 +243,9 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
               for view in views(comparison)]
     script = hdr_script(panels)
     hdr_inline = _inline_script(script) if self_contained else ""
+    temporal = temporal_section(comparison, assets)
+    temporal_js = temporal_script(temporal)
+    temporal_inline = _inline_script(temporal_js) if self_contained and temporal_js else ""
     context = {
         "c": comparison,
         "panels": panels,
@@ -238,10 +263,15 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
         "stability": jsonable(comparison.stability),
         "hdr_inline": hdr_inline,
         "preview_size": preview_size,
-        **_page_context(self_contained, hdr_inline),
+        "temporal": temporal,
+        "temporal_inline": temporal_inline,
+        "decomposition": decomposition_section(comparison, assets),
+        **_page_context(self_contained, hdr_inline, *filter(None, [temporal_inline])),
     }
     if not self_contained:
         atomic_write_bytes(folder / "hdr.js", script.encode("utf-8"))
+        if temporal_js:
+            atomic_write_bytes(folder / "temporal.js", temporal_js.encode("utf-8"))
     html = _environment().get_template("scene.html.j2").render(context)
     atomic_write_bytes(folder / "index.html", html.encode("utf-8"))
 
@@ -292,6 +322,7 @@ def write_index(out_dir: Path, rows: Sequence[dict[str, Any]], *,
             atomic_write_bytes(out_dir / "_static" / name, _static(name).encode("utf-8"))
     html = _environment().get_template("index.html.j2").render({
         "rows": rows, "key_metrics": KEY_METRICS, "formulas": METRIC_FORMULAS,
+        "temporal": temporal_index(rows),
         "failed": sum(1 for r in rows if r["failure"]),
         "self_contained": self_contained, "static": "_static/",
         "css": _static("report.css") if self_contained else "",

@@ -10,6 +10,7 @@ Image naming: ``images`` keys are ``"<view>/<kind>"`` where view is ``camera`` o
 
 * ``method``       caustics-mapping image, linear float32 (H, W, 3)
 * ``reference``  Mitsuba mean, linear float32 (H, W, 3)
+* ``reference_variance``  receivers only: variance of that mean, float32 (H, W, 3)
 * ``signed``     method − reference, float (H, W, 3)
 * ``ssim``       SSIM map of the tone-mapped images, float (H, W) in [-1, 1]
 * ``flip``       HDR-FLIP map, float (H, W) in [0, 1]
@@ -23,11 +24,17 @@ vertically for display so +v points up.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+if TYPE_CHECKING:  # the temporal record imports Table from here
+    from reports.decomposition_records import DecompositionRecord
+    from reports.temporal_records import TemporalComparison
+
 __all__ = [
+    "CHECK_KINDS",
+    "CHECK_KIND_MEANING",
     "METRIC_FORMULAS",
     "EqualErrorSpeedup",
     "MetricValue",
@@ -117,18 +124,55 @@ class Table:
         return cls(tuple(columns), tuple(tuple(r[c] for c in columns) for r in records))
 
 
+#: The three kinds of accuracy check (``harness.checks``), in the order reports list them.
+CHECK_KINDS = ("physical requirement", "method target", "regression lock")
+#: What each kind means, shown beside it in every output.
+CHECK_KIND_MEANING = {
+    "physical requirement": "independent of the method's output: analytic answers, energy, "
+                            "flux agreement, finite values; each constant carries its derivation",
+    "method target": "what this method should reach, with the reason for the number; a target "
+                     "missed today is a known gap, never a loosened number",
+    "regression lock": "calibrated from today's output: guards against change, not accuracy",
+}
+
+
 @dataclass(frozen=True)
 class ThresholdCheck:
-    """One accuracy bound (``harness/checks/data/thresholds.toml``) and whether it held."""
+    """One accuracy check and whether it held.
+
+    ``category`` is one of :data:`CHECK_KINDS`; ``subject`` says whose output is
+    checked (``method`` or ``reference``); ``kind`` how the bound applies (``max``:
+    value <= bound, ``min``: value >= bound, ``band``: |value − 1| <= bound);
+    ``provenance`` where the number comes from (its derivation, reason or
+    calibration); ``gap`` is set when the check is a known miss (an expected failure
+    whose reason names the gap).
+    """
 
     metric: str
     region: str
     view: str
     bound: float
-    kind: str  # "max" (value must be <= bound) or "min" (value must be >= bound)
+    kind: str
     value: float
     passed: bool
     provenance: str = ""
+    category: str = "regression lock"
+    subject: str = "method"
+    gap: str = ""
+
+    @property
+    def outcome(self) -> str:
+        """``pass``, ``FAIL``, ``known gap`` (failed as expected) or ``gap closed``
+        (a known gap that now passes: the gap entry should go)."""
+        if self.gap:
+            return "gap closed" if self.passed else "known gap"
+        return "pass" if self.passed else "FAIL"
+
+    @property
+    def bound_text(self) -> str:
+        """The bound as a condition on the value."""
+        sign = {"max": "≤ ", "min": "≥ ", "band": "|v − 1| ≤ "}.get(self.kind, "")
+        return f"{sign}{self.bound:.4g}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,8 +200,21 @@ class SceneComparison:
         time_ms.
     cost : Table or None
         Columns: series (``caustics_mapping`` or ``reference``), label, estimator,
-        iterations, grid, caustic_map, splat_sigma, time_s, relmse, pareto.
+        iterations, grid, caustic_map, splat_sigma, time_warm_s, time_cold_s, relmse,
+        pareto.
     speedup : EqualErrorSpeedup or None
+        Warm against warm: the headline (``harness.studies.timing``).
+    speedup_cold : EqualErrorSpeedup or None
+        Cold against cold: one-off build and compile costs included on both sides.
+    timing : dict or None
+        The timing policy and each side's one-off costs: ``{"policy": str,
+        "method": {"build_s", "compile_s"}, "reference": {...}}``.
+    temporal : TemporalComparison or None
+        The temporal study (``--studies temporal``): the animation compared frame by
+        frame, its flicker metrics and per-pixel maps (``reports.temporal_records``).
+    decomposition : DecompositionRecord or None
+        Where the error comes from (``--studies decomposition``): exact light paths,
+        then the method's approximations one at a time (``reports.decomposition_records``).
     claims : dict of str to str
         The paper's claims checked against the convergence numbers, and the outcome.
     provenance : dict
@@ -167,6 +224,8 @@ class SceneComparison:
         Paths of written originals relative to the scene's output folder
         (``{"camera/method": "camera_method.exr", ...}``).
     thresholds : tuple of ThresholdCheck
+        The accuracy checks of every kind (physical requirements, method targets,
+        regression locks) that applied to this scene and method.
     stability : dict or None
         Outcome of the numerical-stability checks for this scene, if run.
     crosscheck : Table or None
@@ -207,6 +266,10 @@ class SceneComparison:
     method: str = "paper"
     method_description: str = ""
     flux_budget: Table | None = None
+    speedup_cold: EqualErrorSpeedup | None = None
+    timing: dict[str, Any] | None = None
+    temporal: TemporalComparison | None = None
+    decomposition: DecompositionRecord | None = None
 
     @property
     def page(self) -> str:

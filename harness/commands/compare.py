@@ -17,13 +17,12 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
-from harness.checks import GOLDEN_DIR, THRESHOLDS_FILE
-from harness.checks.accuracy import golden_checks
-from harness.checks.thresholds import load_thresholds
+from harness.checks import GOLDEN_DIR, KINDS, LOCKS_FILE
+from harness.checks.run import comparison_checks, count_by_kind, load_check_files
 from harness.commands.crosscheck import run_crosscheck
 from harness.commands.scene import load_scenes
 from harness.compare.isolation import load_failure, run_scene, write_failure
-from harness.compare.pipeline import STUDIES, CompareOptions, compare_scene
+from harness.compare.pipeline import KNOWN_STUDIES, STUDIES, CompareOptions, compare_scene
 from harness.compare.staging import staged_output
 from harness.terminal import markup, plain
 from harness.writable import usable_cache
@@ -34,7 +33,7 @@ from reports.build import write_index
 from reports.records import SceneFailure
 from scenes import SCENES_DIR, Scene, SceneError, default_scene_path, parse_override, with_settings
 
-__all__ = ["DEFAULT_METHODS", "compare", "summary_rows"]
+__all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "summary_rows"]
 
 #: Methods compared when none is named: both caustics-mapping presets.
 DEFAULT_METHODS = ("paper", "strong")
@@ -57,11 +56,16 @@ def summary_rows(comparisons) -> list[tuple[str, ...]]:
             floor = "" if m.noise_floor is None else f" ({m.noise_floor:.3g})"
             return f"{m.value:.3g}{floor}"
 
-        frame = (c.provenance.get("caustics_mapping") or c.provenance.get("method")
-                 or {}).get("frame_time_ms")
-        speedup = f"{c.speedup.speedup:.3g}x {c.speedup.kind}" if c.speedup else "–"
+        timing = c.provenance.get("caustics_mapping") or c.provenance.get("method") or {}
+        # The speedup's own scope (receiver-map passes) where there is one.
+        frame = timing.get("maps_time_ms", timing.get("frame_time_ms"))
+        speedup = (f"{c.speedup.speedup:.3g}x / {c.speedup_cold.speedup:.3g}x"
+                   if c.speedup and c.speedup_cold else "–")
         passed = sum(t.passed for t in c.thresholds)
-        bounds = f"{passed}/{len(c.thresholds)}" if c.thresholds else "–"
+        gaps = sum(t.outcome == "known gap" for t in c.thresholds)
+        bounds = (f"{passed}/{len(c.thresholds)}"
+                  + (f" ({gaps} known gap{'s' if gaps > 1 else ''})" if gaps else "")
+                  if c.thresholds else "–")
         rows.append((c.name, c.method, value("relmse"), value("ssim"), value("flip"),
                      value("flux_ratio", region="full"),
                      f"{frame:.1f}" if frame is not None and math.isfinite(frame) else "–",
@@ -69,13 +73,31 @@ def summary_rows(comparisons) -> list[tuple[str, ...]]:
     return rows
 
 
+def check_count_lines(comparisons) -> list[str]:
+    """One line per kind of accuracy check: how many were checked over every scene and
+    method, and how they came out (plain text)."""
+    checks = [t for c in comparisons if not isinstance(c, SceneFailure) for t in c.thresholds]
+    counts = count_by_kind(checks)
+    lines = []
+    for kind in KINDS:
+        n = counts[kind]
+        parts = [f"{n['passed']} passed"]
+        if n["failed"]:
+            parts.append(f"{n['failed']} FAILED")
+        if n["known gaps"]:
+            gaps = n["known gaps"]
+            parts.append(f"{gaps} known gap{'s' if gaps > 1 else ''}")
+        lines.append(f"{kind}s checked: {n['checked']} ({', '.join(parts)})")
+    return lines
+
+
 def _print_summary(comparisons, out_dir: Path, seconds: float) -> None:
     # Every cell may hold text from a scene file: escaped, or `[/]` is Rich markup.
     table = Table(title=markup(f"methods vs Mitsuba ({seconds:.0f} s) -> {out_dir}/index.html"),
                   caption="receiver 0, caustic region; (noise floor: an independent "
                   "reference seed vs the reference)")
-    for column in ("scene", "method", "relMSE", "SSIM", "FLIP", "flux ratio (full)", "frame ms",
-                   "equal-error speedup", "bounds"):
+    for column in ("scene", "method", "relMSE", "SSIM", "FLIP", "flux ratio (full)",
+                   "maps ms (warm)", "equal-error speedup (warm / cold)", "checks passed"):
         table.add_column(column)
     for row in summary_rows(comparisons):
         table.add_row(*(markup(cell) for cell in row))
@@ -84,6 +106,8 @@ def _print_summary(comparisons, out_dir: Path, seconds: float) -> None:
     if not console.is_terminal:
         console = Console(width=160)
     console.print(table)
+    for line in check_count_lines(comparisons):
+        console.print(markup(line))
     for c in comparisons:
         # A scene that did not validate had its problems printed before the run.
         if isinstance(c, SceneFailure) and c.stage != "validation":
@@ -115,14 +139,15 @@ def _options(args: argparse.Namespace, studies: tuple[str, ...]) -> CompareOptio
     use_cache = not args.no_cache and usable_cache(cache_dir(args.cache_dir))
     return CompareOptions(studies=studies, max_iterations=args.max_iterations,
                           quick=args.quick, cache=args.cache_dir, use_cache=use_cache,
-                          progress=not args.quiet)
+                          progress=not args.quiet, frames=getattr(args, "frames", None))
 
 
 def compare(args: argparse.Namespace) -> int:
     """``caustics compare``: both renderers, every study, data files and the report.
 
-    Returns 0; 1 when a scene failed (its row and page say why); 3 when a bound
-    failed and ``--fail-on-thresholds`` asks for it; 2 for an unknown study.
+    Returns 0; 1 when a scene failed (its row and page say why) or a checks file is
+    missing; 3 when an accuracy check failed (not a known gap) and
+    ``--fail-on-thresholds`` asks for it; 2 for an unknown study.
     """
     start = time.perf_counter()
     overrides = dict(parse_override(item) for item in args.set or [])
@@ -131,28 +156,30 @@ def compare(args: argparse.Namespace) -> int:
             overrides[name] = getattr(args, name)
     scenes = _load(args.scenes, overrides)
     studies = tuple(s for s in (args.studies or ",".join(STUDIES)).split(",") if s)
-    unknown = sorted(set(studies) - set(STUDIES))
+    unknown = sorted(set(studies) - set(KNOWN_STUDIES))
     if unknown:
-        print(f"error: unknown study {', '.join(unknown)} (choose from {', '.join(STUDIES)})",
-              file=sys.stderr)
+        print(f"error: unknown study {', '.join(unknown)} "
+              f"(choose from {', '.join(KNOWN_STUDIES)})", file=sys.stderr)
+        return 2
+    if getattr(args, "frames", None) is not None and "temporal" not in studies:
+        print("error: --frames sets the temporal study's frames: add temporal to --studies "
+              "(e.g. --studies temporal)", file=sys.stderr)
         return 2
     names = [*(args.preset or []), *(args.method or [])] or list(DEFAULT_METHODS)
     methods = [load_method(name) for name in dict.fromkeys(names)]
-    thresholds_path = Path(args.thresholds) if args.thresholds else THRESHOLDS_FILE
-    bounds = load_thresholds(thresholds_path)  # a missing file is an error, never "no bounds"
+    # Every file is read before anything renders: a missing one is an error naming it.
+    check_files = load_check_files(Path(args.thresholds) if args.thresholds else LOCKS_FILE)
     golden_dir = Path(args.golden) if args.golden else GOLDEN_DIR
     options = _options(args, studies)
 
     def run(scene, method):
         comparison = compare_scene(scene, method=method, options=options)
-        checks = None
-        # The bounds are regression locks of the paper preset (calibrated from its
-        # output); no other method has any yet.
-        if bounds and method.name == "paper":
-            checks = golden_checks(scene, scenes_dir=SCENES_DIR, golden_dir=golden_dir,
-                                   bounds=bounds)
-        if checks:
-            comparison = dataclasses.replace(comparison, thresholds=checks)
+        checked = comparison_checks(method.configure(scene), method.name, comparison,
+                                    check_files, scenes_dir=SCENES_DIR, golden_dir=golden_dir)
+        comparison = dataclasses.replace(
+            comparison, thresholds=checked.checks,
+            provenance={**comparison.provenance,
+                        "accuracy_checks_not_applied": checked.not_applied})
         if args.crosscheck:
             cross = run_crosscheck(scene, photons=args.crosscheck_photons,
                                    seeds=scene.settings.seeds,
@@ -182,5 +209,5 @@ def compare(args: argparse.Namespace) -> int:
     _print_summary(items, Path(args.output), time.perf_counter() - start)
     if any(isinstance(item, SceneFailure) for item in items):
         return 1
-    failed = [t for c in items for t in c.thresholds if not t.passed]
+    failed = [t for c in items for t in c.thresholds if t.outcome == "FAIL"]
     return 3 if failed and args.fail_on_thresholds else 0

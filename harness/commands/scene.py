@@ -143,6 +143,13 @@ def describe(args: argparse.Namespace) -> int:
               f"estimator {chosen(s.estimator)}, safeguarded {chosen(s.safeguarded)}, "
               f"iterations {chosen(s.iterations)}, splat {chosen(s.splat)}, "
               f"normalization {s.normalization}")
+        if scene.animation is not None:
+            a = scene.animation
+            moving = (["light"] if any(a.light.velocity) or any(a.light.angular_velocity)
+                      else []) + [f"objects[{m.index}]" for m in a.objects]
+            moves = ", ".join(moving) or "nothing but the water surfaces' time"
+            print(f"  animation: {a.frames} frames at {a.fps:g} fps from τ = {a.start:g} s; "
+                  f"moves: {moves}")
     return 0
 
 

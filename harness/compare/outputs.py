@@ -12,6 +12,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from harness.compare.temporal_outputs import temporal_json, write_temporal_maps
 from renderers.exr import write_exr
 from reports.records import METRIC_FORMULAS, SceneComparison, Table
 from scenes.files import atomic_write_bytes, dumps_strict
@@ -34,6 +35,16 @@ def write_table(path: str | Path, table: Table) -> None:
     atomic_write_bytes(path, buffer.getvalue().encode("utf-8"))
 
 
+def _speedups(comparison: SceneComparison) -> dict[str, Any] | None:
+    """Both equal-error speedups and the timing policy they follow, or None when
+    no cost study ran."""
+    if comparison.timing is None:
+        return None
+    return {"warm": asdict(comparison.speedup) if comparison.speedup else None,
+            "cold": asdict(comparison.speedup_cold) if comparison.speedup_cold else None,
+            **comparison.timing}
+
+
 def comparison_json(comparison: SceneComparison) -> dict[str, Any]:
     """The JSON form of a comparison (everything but the images)."""
     return {
@@ -44,19 +55,23 @@ def comparison_json(comparison: SceneComparison) -> dict[str, Any]:
         "formulas": METRIC_FORMULAS,
         "metrics": [asdict(m) for m in comparison.metrics],
         "exposure": comparison.exposure,
-        "speedup": asdict(comparison.speedup) if comparison.speedup else None,
+        "equal_error_speedup": _speedups(comparison),
         "claims": comparison.claims,
         "thresholds": [asdict(t) for t in comparison.thresholds],
         "stability": comparison.stability,
         "flux_budget": comparison.flux_budget.records() if comparison.flux_budget else None,
         "crosscheck": comparison.crosscheck.records() if comparison.crosscheck else None,
         "provenance": comparison.provenance,
+        "temporal": temporal_json(comparison.temporal),
+        "decomposition": (comparison.decomposition.as_dict()
+                          if comparison.decomposition is not None else None),
         "files": comparison.files,
     }
 
 
 def write_comparison(scene_dir: str | Path, comparison: SceneComparison) -> None:
-    """Write metrics.json, convergence.csv, cost_accuracy.csv and the EXR originals
+    """Write metrics.json, convergence.csv, cost_accuracy.csv, temporal.csv with the
+    temporal maps (``harness.compare.temporal_outputs``), decomposition.csv and the EXR originals
     named in ``comparison.files`` (keys ``<view>/<kind>`` of ``comparison.images``)."""
     scene_dir = Path(scene_dir)
     for key, name in comparison.files.items():
@@ -67,4 +82,9 @@ def write_comparison(scene_dir: str | Path, comparison: SceneComparison) -> None
         write_table(scene_dir / "convergence.csv", comparison.convergence)
     if comparison.cost is not None:
         write_table(scene_dir / "cost_accuracy.csv", comparison.cost)
+    if comparison.temporal is not None:
+        write_table(scene_dir / comparison.temporal.files["table"], comparison.temporal.table)
+        write_temporal_maps(scene_dir, comparison.temporal)
+    if comparison.decomposition is not None:
+        write_table(scene_dir / "decomposition.csv", comparison.decomposition.table)
     write_json(scene_dir / "metrics.json", comparison_json(comparison))

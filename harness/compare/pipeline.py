@@ -29,18 +29,26 @@ from harness.compare.regions import caustic_region, object_mask
 from harness.studies.claims import check_five_iterations, check_one_iteration
 from harness.studies.convergence_study import convergence_study
 from harness.studies.cost_study import cost_study, sweep_size
-from harness.studies.runner import RealtimeRunner, frame_seconds
+from harness.studies.decomposition import DecompositionOptions, decomposition_study
+from harness.studies.runner import RealtimeRunner, caustic_seconds, frame_seconds
+from harness.studies.temporal import TemporalOptions, temporal_study
+from harness.studies.timing import MIN_REPEATS
 from harness.terminal import plain
 from renderers.methods import Method, load_method
 from renderers.mitsuba.reference import render_reference
 from reports.display import luminance
 from reports.records import SceneComparison
 from scenes import Scene, effects_of, with_settings
+from scenes.animation import animation_of
 from scenes.geometry import build_geometry
 
-__all__ = ["STUDIES", "CompareOptions", "compare_scene"]
+__all__ = ["KNOWN_STUDIES", "OPTIONAL_STUDIES", "STUDIES", "CompareOptions", "compare_scene"]
 
 STUDIES = ("metrics", "convergence", "cost")
+#: Studies run only when named (``--studies ...,temporal``): the animation's frames;
+#: the error decomposition (exact light paths, then the method's approximations).
+OPTIONAL_STUDIES = ("temporal", "decomposition")
+KNOWN_STUDIES = STUDIES + OPTIONAL_STUDIES
 REFERENCE_KEYS = ("photons", "photon_budget", "spp", "seed", "seeds", "relative_noise",
                   "target_noise", "stopped_by", "event_chains", "variant", "versions",
                   "camera_integrator", "camera_max_depth", "camera_limits", "cache", "hash")
@@ -53,15 +61,23 @@ class CompareOptions:
     Attributes
     ----------
     studies : tuple of str
-        Any of ``metrics`` (always computed), ``convergence``, ``cost``.
+        Any of ``metrics`` (always computed), ``convergence``, ``cost``, ``temporal``
+        (the scene's animation frame by frame, ``harness.studies.temporal``),
+        ``decomposition`` (where the error comes from, ``harness.studies.decomposition``).
+    frames : int or None
+        Frames of the temporal study (None: the scene's ``[animation] frames``).
     max_iterations : int
         Iterations 0..N of the convergence table.
     quick : bool
-        Smaller sweeps and one timing repeat (a quick look, not for reporting).
+        Smaller sweeps and one timing repeat (a quick look, not for reporting);
+        otherwise :data:`~harness.studies.timing.MIN_REPEATS`.
     cache, use_cache
         Reference cache root (None: the default) and whether to use it.
     progress : bool
         Progress bars on stderr.
+    dense_grid : int or None
+        Lattice side of the decomposition's step 0 (dense exact paths); None, or
+        ``quick``, leaves the step out.
     """
 
     studies: tuple[str, ...] = STUDIES
@@ -70,11 +86,13 @@ class CompareOptions:
     cache: str | None = None
     use_cache: bool = True
     progress: bool = True
+    frames: int | None = None
+    dense_grid: int | None = 1024
 
     @property
     def repeats(self) -> int:
         """Timed renders per configuration (the median is kept)."""
-        return 1 if self.quick else 3
+        return 1 if self.quick else MIN_REPEATS
 
 
 def _references(scene: Scene, options: CompareOptions):
@@ -173,6 +191,13 @@ def _score_views(views: list[_View]):
     return metrics, images, exposure, files
 
 
+def _reference_variance(reference) -> dict[str, np.ndarray]:
+    """``receiver<i>/reference_variance``: the variance of the reference's mean per
+    texel, which the physical requirements need (``harness.checks``); not written."""
+    return {f"receiver{i}/reference_variance": np.asarray(m.variance, np.float32)
+            for i, m in enumerate(reference.receivers) if m.variance is not None}
+
+
 def _timed_method(method: Method, scene: Scene, repeats: int):
     """(result, warm seconds, timer) over ``repeats`` renders after a warm-up render.
 
@@ -200,6 +225,7 @@ def _compare_other(scene: Scene, method: Method, options: CompareOptions) -> Sce
     geometry = build_geometry(scene)
     views, camera_note = _views(scene, geometry, result, reference, independent)
     metrics, images, exposure, files = _score_views(views)
+    images.update(_reference_variance(reference))
     provenance = {
         "scene_file": scene.source,
         "method": {"name": method.name, "renderer": result.renderer,
@@ -218,7 +244,23 @@ def _compare_other(scene: Scene, method: Method, options: CompareOptions) -> Sce
         images=images, exposure=exposure, provenance=provenance, files=files,
         stability=stability, method=method.name, method_description=method.description,
         flux_budget=flux_budget(result.metadata, stability, result.receivers,
-                                reference.receivers))
+                                reference.receivers),
+        temporal=_temporal(scene, method, options))
+
+
+def _temporal(scene: Scene, method: Method, options: CompareOptions, ctx=None):
+    """The temporal study when ``options.studies`` names it, else None."""
+    if "temporal" not in options.studies:
+        return None
+    count = animation_of(scene, frames=options.frames).frames
+    bar, tick = _progress_bar(3 * count, options.progress, f"{scene.name}: temporal")
+    try:
+        return temporal_study(scene, method, ctx=ctx, options=TemporalOptions(
+            frames=options.frames, cache=options.cache, use_cache=options.use_cache,
+            progress=tick))
+    finally:
+        if bar is not None:
+            bar.close()
 
 
 def _reference_provenance(reference, independent) -> dict:
@@ -247,8 +289,9 @@ def compare_scene(scene: Scene, *, method: Method | None = None,
         gl_renderer = runner.ctx.info.get("GL_RENDERER", "unknown")
         views, camera_note = _views(scene, runner.geometry, result, reference, independent)
         metrics, images, exposure, files = _score_views(views)
+        images.update(_reference_variance(reference))
 
-        convergence = cost = speedup = speedup_point = None
+        convergence = cost = speedup = speedup_point = speedup_cold = timing = None
         claims = {}
         ref0 = reference.receivers[0].irradiance
         caustic0 = caustic_region(ref0)
@@ -265,11 +308,17 @@ def compare_scene(scene: Scene, *, method: Method | None = None,
         if "cost" in studies:
             total = sweep_size(runner.settings, quick=options.quick)
             bar, tick = _progress_bar(total, options.progress, f"{scene.name}: cost sweep")
-            cost, speedup, speedup_point = cost_study(
+            outcome = cost_study(
                 runner, ref0, caustic0, reference_photons=int(reference.metadata["photons"]),
                 quick=options.quick, progress=tick)
+            cost, speedup, speedup_point = outcome.table, outcome.warm, outcome.point
+            speedup_cold, timing = outcome.cold, outcome.timing()
             if bar is not None:
                 bar.close()
+        temporal = _temporal(scene, method, options, runner.ctx)
+        decomposition = _decomposition(runner, reference, metrics, options)
+        if decomposition is not None:
+            claims |= decomposition.claims
 
     stability = stability_summary(scene, runner.geometry, result, convergence,
                                   hits=frame.hits)
@@ -280,6 +329,9 @@ def compare_scene(scene: Scene, *, method: Method | None = None,
             "passes": result.metadata.get("passes"),
             "timings_ms": {k: v * 1e3 for k, v in result.timings.items()},
             "frame_time_ms": frame_time * 1e3,
+            # The scope the cost study and its speedup use: the passes producing
+            # the receiver maps (camera and shadow map excluded), same frames.
+            "maps_time_ms": runner.median(clock=caustic_seconds) * 1e3,
             "timer": result.timer,
             "lost_splats": result.metadata.get("lost_splats"),
             "status_counts": result.metadata.get("status_counts"),
@@ -294,11 +346,33 @@ def compare_scene(scene: Scene, *, method: Method | None = None,
         name=scene.name, description=scene.info.description, source=scene.source,
         effects=effects_of(scene), settings=asdict(scene.settings), metrics=tuple(metrics),
         images=images, exposure=exposure, convergence=convergence, cost=cost,
-        speedup=speedup, claims=claims, provenance=provenance, files=files,
+        speedup=speedup, speedup_cold=speedup_cold, timing=timing, claims=claims,
+        provenance=provenance, files=files,
         stability=stability, speedup_point=speedup_point, method=method.name,
         method_description=method.description,
         flux_budget=flux_budget(result.metadata, stability, result.receivers,
-                                reference.receivers))
+                                reference.receivers),
+        temporal=temporal, decomposition=decomposition)
+
+
+def _decomposition(runner: RealtimeRunner, reference, metrics, options: CompareOptions):
+    """The decomposition study when ``options.studies`` names it, else None (so a
+    compare without it pays nothing); its noise floor is the measured one."""
+    if "decomposition" not in options.studies:
+        return None
+    floor = next((m.noise_floor for m in metrics if (m.view, m.region, m.metric)
+                  == ("receiver0", "caustic", "relmse")), None)
+    dense = None if options.quick else options.dense_grid
+    total = 4 + (dense is not None)
+    bar, tick = _progress_bar(total, options.progress, f"{runner.scene.name}: decomposition")
+    try:
+        return decomposition_study(
+            runner, reference.receivers[0], noise_floor=floor,
+            options=DecompositionOptions(dense_grid=dense, repeats=options.repeats),
+            progress=tick)
+    finally:
+        if bar is not None:
+            bar.close()
 
 
 def _claims(convergence) -> dict[str, str]:

@@ -2,11 +2,13 @@
 
 from harness.figures.bunny import figure_10, figure_13a
 from harness.figures.common import FigureContext, FigureResult
+from harness.figures.decomposition import figure_decomposition
 from harness.figures.ring import figure_12
 from harness.figures.sphere import figure_06, figure_07, figure_11, figure_13b
 from harness.figures.water import figure_05, figure_08
 
-#: Figure name to the function that draws it, in the paper's order.
+#: Figure name to the function that draws it, in the paper's order (then the
+#: harness's own figures).
 FIGURES = {
     "fig05": figure_05,
     "fig06": figure_06,
@@ -17,6 +19,8 @@ FIGURES = {
     "fig12": figure_12,
     "fig13a": figure_13a,
     "fig13b": figure_13b,
+    # Not a paper figure: where each paper scene's error comes from (both presets).
+    "decomposition": figure_decomposition,
 }
 
 __all__ = ["FIGURES", "FigureContext", "FigureResult"]

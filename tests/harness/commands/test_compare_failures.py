@@ -84,7 +84,10 @@ def test_real_run_with_a_caustic_free_scene_and_a_failing_one(tmp_path, monkeypa
     assert main(["compare", str(good), str(dark), str(broken), str(dark_light), "-o",
                  str(out), "--quick", "--preset", "paper", "--cache-dir",
                  str(tmp_path / "cache"), "-q", *SMALL]) == 1
-    assert _index_rows(out) == [("", "good-paper"), ("fail failure", "nocaustic-paper"),
+    # good-paper completes; its row is "fail" for its accuracy checks alone (the paper
+    # preset's spurious total internal reflection in the sphere, 2.7 % of the flux
+    # against the 0.058 % bound: a physical requirement), not a failure row.
+    assert _index_rows(out) == [("fail", "good-paper"), ("fail failure", "nocaustic-paper"),
                                 ("fail failure", "broken-paper"),
                                 ("fail failure", "darklight-paper")]
     page = (out / "nocaustic-paper" / "index.html").read_text()
