@@ -47,6 +47,11 @@ class RealtimeRunner:
     """
 
     def __init__(self, scene: Scene, *, repeats: int = 3):
+        # Driver start-up (the EGL display, the device choice) is excluded as the
+        # Dr.Jit backend's is on the reference side (it happens at import): only
+        # the first context in a process pays it, so timing it would make the
+        # first runner's build time differ from every later one's.
+        create_context().release()
         start = time.perf_counter()
         self.scene = scene
         self.geometry = build_geometry(scene)

@@ -3,7 +3,8 @@
 Every time the cost study reports comes in two kinds, taken the same way for the
 real-time method and for the reference's photon tracer, over the same scope (the
 work that produces the compared receiver maps, their read-back to host memory
-included on both sides; Python imports excluded on both sides):
+included on both sides; Python imports and driver start-up, the EGL display and
+Dr.Jit's backend, excluded on both sides):
 
 * **warm**: steady state, the median of ``repeats`` runs (at least
   :data:`MIN_REPEATS` unless the comparison is a quick look) after one untimed
