@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from harness.raycast import ReceiverTracer
-from harness.studies.convergence import OUTCOMES, classify
+from harness.studies.convergence import OUTCOMES, classify, texel_footprint
 from renderers.caustics_mapping.caustic_trace import STATUS
 from renderers.caustics_mapping.lights import light_setups
 from renderers.caustics_mapping.presets import resolve_settings
@@ -132,15 +132,7 @@ def estimate_outcomes(scene: Scene, geometry: SceneGeometry, hits: dict[str, np.
     settings = resolve_settings(scene.settings)
     setups = light_setups(scene, geometry, frustum_fit=settings.frustum)
     which = hits.get("light", np.zeros(len(status)))[traced].astype(int)
-    texel = np.empty(len(points))
-    for index, setup in enumerate(setups):
-        mine = which == index
-        view = setup.map_views[0]
-        if view.perspective:
-            distance = np.linalg.norm(points[mine] - setup.position, axis=1)
-            texel[mine] = 2 * view.half_size * distance / settings.caustic_map
-        else:
-            texel[mine] = 2 * view.half_size / settings.caustic_map
+    texel = texel_footprint(setups, which, points, size=settings.caustic_map)
     outcome = classify(history, lost, exact.distance, texel,
                        tolerance_texels=tolerance_texels)
     judged = outcome != ""

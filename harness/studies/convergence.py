@@ -29,7 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LOOKUPS", "OUTCOMES", "IterationStats", "iteration_stats", "lookups_per_vertex"]
+__all__ = ["LOOKUPS", "OUTCOMES", "IterationStats", "iteration_stats", "lookups_per_vertex",
+           "texel_footprint"]
 
 #: Positions-texture lookups: for the starting estimate g(0), and per iteration.
 LOOKUPS = {"modified": (1, 1), "newton": (1, 2), "secant": (1, 1)}
@@ -129,3 +130,20 @@ def iteration_stats(history, lost, exact, texel_size, *, iteration: int | None =
     fractions = {name: float((outcome == name).sum() / count) for name in OUTCOMES}
     k = history.shape[1] - 1 if iteration is None else iteration
     return IterationStats(k, *_stats(error[ok]), *_stats((error / texel)[ok]), **fractions)
+
+
+def texel_footprint(setups, light: np.ndarray, points: np.ndarray, *, size: int) -> np.ndarray:
+    """Width (m) of one caustic-map texel at each point, seen from the light sample
+    that traced it (``light`` indexes ``setups``, the renderer's light setups): 2 t d / M
+    for a perspective view of half-angle tangent t at distance d, 2 h / M for an
+    orthographic view of half-width h; M = ``size`` texels."""
+    out = np.empty(len(points))
+    for index, setup in enumerate(setups):
+        mine = light == index
+        view = setup.map_views[0]
+        if view.perspective:
+            distance = np.linalg.norm(points[mine] - setup.position, axis=1)
+            out[mine] = 2 * view.half_size * distance / size
+        else:
+            out[mine] = 2 * view.half_size / size
+    return out

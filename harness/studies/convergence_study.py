@@ -13,6 +13,7 @@ import numpy as np
 
 from harness.compare.evaluate import score_value
 from harness.raycast import ReceiverTracer
+from harness.studies import convergence
 from harness.studies.convergence import iteration_stats, lookups_per_vertex
 from harness.studies.runner import RealtimeRunner
 from renderers.caustics_mapping.caustic_trace import STATUS
@@ -29,23 +30,11 @@ COLUMNS = ("estimator", "safeguarded", "iteration", "mean_error_m", "p95_error_m
 
 
 def texel_footprint(runner: RealtimeRunner, hits: dict, points: np.ndarray) -> np.ndarray:
-    """Width (m) of one caustic-map texel at each point, seen from the light that
-    traced it: 2 t d / M for a perspective view of half-angle tangent t at distance
-    d, 2 h / M for an orthographic view of half-width h."""
-
-    setups = light_setups(runner.scene, runner.geometry)
-    size = runner.scene.settings.caustic_map
-    light = hits["light"].astype(int)
-    out = np.empty(len(points))
-    for index, setup in enumerate(setups):
-        mine = light == index
-        view = setup.map_views[0]
-        if view.perspective:
-            distance = np.linalg.norm(points[mine] - setup.position, axis=1)
-            out[mine] = 2 * view.half_size * distance / size
-        else:
-            out[mine] = 2 * view.half_size / size
-    return out
+    """Width (m) of one caustic-map texel at each point (:func:`.convergence.texel_footprint`
+    for the runner's scene and its light setups)."""
+    return convergence.texel_footprint(light_setups(runner.scene, runner.geometry),
+                                       hits["light"].astype(int), points,
+                                       size=runner.scene.settings.caustic_map)
 
 
 def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarray, *,
