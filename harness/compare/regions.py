@@ -9,7 +9,7 @@ from reports.display import luminance
 from scenes.geometry import SceneGeometry
 from scenes.model import Camera
 
-__all__ = ["CAUSTIC_FRACTION", "caustic_region", "object_mask"]
+__all__ = ["CAUSTIC_FRACTION", "caustic_region", "object_mask", "object_region"]
 
 #: A texel is in the caustic region when the reference's luminance exceeds this
 #: fraction of its 99.5th percentile (a robust maximum that ignores fireflies).
@@ -29,18 +29,17 @@ def caustic_region(reference: np.ndarray, *, fraction: float = CAUSTIC_FRACTION)
     return lum > fraction * top
 
 
-def object_mask(camera: Camera, geometry: SceneGeometry, *, dilate: int = 1) -> np.ndarray:
-    """Boolean (H, W) mask of camera pixels that see a caustic object.
-
-    Computed by casting the camera's primary rays against the objects' triangles and
-    dilated by ``dilate`` pixels, so pixels on the silhouette, where the two
-    renderers' rasterisation and sampling differ, are excluded too.
-    """
+def _object_hits(camera: Camera, geometry: SceneGeometry) -> np.ndarray:
+    """(H, W) bool: the pixel centre's primary ray meets a caustic object's triangles."""
     width, height = camera.resolution
     origins, directions = camera_rays(camera)
     hits = MeshTracer([o.mesh for o in geometry.objects])(origins, directions)
-    mask = np.isfinite(hits.distance).reshape(height, width)
-    for _ in range(dilate):
+    return np.isfinite(hits.distance).reshape(height, width)
+
+
+def _grow(mask: np.ndarray, steps: int) -> np.ndarray:
+    """``mask`` dilated by ``steps`` pixels (4-neighbourhood)."""
+    for _ in range(steps):
         grown = mask.copy()
         grown[1:] |= mask[:-1]
         grown[:-1] |= mask[1:]
@@ -48,3 +47,21 @@ def object_mask(camera: Camera, geometry: SceneGeometry, *, dilate: int = 1) -> 
         grown[:, :-1] |= mask[:, 1:]
         mask = grown
     return mask
+
+
+def object_mask(camera: Camera, geometry: SceneGeometry, *, dilate: int = 1) -> np.ndarray:
+    """Boolean (H, W) mask of camera pixels that see a caustic object.
+
+    Computed by casting the camera's primary rays against the objects' triangles and
+    dilated by ``dilate`` pixels, so pixels on the silhouette, where the two
+    renderers' rasterisation and sampling differ, are excluded too.
+    """
+    return _grow(_object_hits(camera, geometry), dilate)
+
+
+def object_region(camera: Camera, geometry: SceneGeometry, *, erode: int = 1) -> np.ndarray:
+    """Boolean (H, W) mask of the camera pixels inside a caustic object's silhouette:
+    the primary-ray hits shrunk by ``erode`` pixels, so the silhouette pixels, where
+    the renderers' rasterisation and subpixel sampling differ, are scored by neither
+    this region nor the one without the object (:func:`object_mask`)."""
+    return ~_grow(~_object_hits(camera, geometry), erode)

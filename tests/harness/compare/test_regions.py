@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 
 from harness.compare.pipeline import _camera_is_blind
-from harness.compare.regions import caustic_region, object_mask
+from harness.compare.regions import caustic_region, object_mask, object_region
 from scenes import load_scene
 from scenes.geometry import build_geometry
 from tests.conftest import SCENES
@@ -34,6 +34,25 @@ def test_object_mask_covers_the_sphere():
     _, cols = np.nonzero(mask)
     assert abs(cols.mean() - 31.5) < 1.0  # centred horizontally (sphere on the axis plane)
     assert object_mask(camera, build_geometry(scene), dilate=1).sum() > mask.sum()
+
+
+def test_object_region_is_the_silhouette_interior():
+    """The scored object region is the undilated object mask shrunk by one pixel: it
+    lies inside the silhouette, shares no pixel with the region without the object
+    (the dilated mask's complement), and of the ≈ 233 px disc (previous test) it
+    keeps all but its rim, about 2π · 8.6 ≈ 54 px: between 130 and 200 px."""
+    scene = load_scene(SCENES / "glass_sphere.toml")
+    camera = dataclasses.replace(scene.camera, resolution=(64, 64))
+    geometry = build_geometry(scene)
+    inside = object_region(camera, geometry)
+    hits = object_mask(camera, geometry, dilate=0)
+    assert np.all(hits[inside])
+    assert not np.any(inside & ~object_mask(camera, geometry))
+    assert 130 < inside.sum() < 200, inside.sum()
+    # Every pixel of the region has its four neighbours on the object.
+    rows, cols = np.nonzero(inside)
+    for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+        assert hits[rows + dr, cols + dc].all()
 
 
 def test_blind_reference_camera_is_detected():
