@@ -25,7 +25,7 @@ from scenes.geometry import build_geometry
 __all__ = ["CAMERA_PASSES", "RealtimeRunner", "caustic_seconds", "frame_seconds"]
 
 #: Passes that only serve the camera image, not the receiver irradiance maps.
-CAMERA_PASSES = ("camera", "shadow_map")
+CAMERA_PASSES = ("camera", "camera_backfaces", "shadow_map")
 
 
 def frame_seconds(timings: dict[str, float]) -> float:

@@ -1,5 +1,40 @@
 """Pass 5: the final camera pass. Output (H, W, 3) float32 linear radiance, row 0
-at the top of the image."""
+at the top of the image.
+
+Receivers seen directly are shaded from the light's maps (direct light with the
+shadow test, the caustic map). A caustic object is seen along the event chain the
+photon tracer counts through it, traced from the eye (``camera.glsl`` states the
+maths): one reflection (conductor), one refraction (water surface), or two (closed
+dielectric: the exit is estimated in the back faces from the camera of pass 5a,
+:mod:`.camera_backfaces`, after Wyman 2005), with Fresnel, absorption and dispersion
+as the effects say. The ray leaving the object meets the receivers where the preset's
+estimator finds the hit in the light's receiver positions atlas.
+
+Why the light's atlas and not receivers rendered from the camera: it exists already,
+it shows the receivers under the object (the object is not drawn in it), and the
+caustic pass's estimators and reads then decide both where light lands and where the
+eye looks through the object. Its limits: a receiver the light does not see (the
+side of a rock turned away from the sun) is not seen through the object either, and
+a hit is located to one positions-map texel, not one camera pixel.
+
+Per preset (the estimator settings of the resolved scene settings, for the exit and
+for the receiver hit alike):
+
+* ``paper``: the paper renders "double surface refraction (both for the appearance
+  of the bunny as well as for the caustics)" with Wyman's technique (its Fig. 1 and
+  Section 5). Wyman's distance blends d_V (the back face along the view ray) with a
+  per-vertex d_N that he precomputes by ray casting, which the paper's "no
+  precomputation" (Section 3.2) rules out; so the exit starts from d_V and is refined
+  by the paper's own estimator (modified, 3 iterations, nearest reads), as the
+  caustic pass refines its exit. Every estimate is shaded (no verification), as every
+  caustic estimate is splatted.
+* ``strong``: the safeguarded secant, 5 iterations, bilinear reads within one
+  surface, verified receiver hits (a residual above one positions-map texel is the
+  empty sky: black). For camera rays, which may run at any angle to the light's
+  projection rays, the secant runs on the signed depth along the projection ray
+  instead of the caustic pass's distance function (``surface_estimate.glsl``: on
+  metal_ring the latter left 78 % of the ring's floor reflections unconverged).
+"""
 
 from __future__ import annotations
 
@@ -9,23 +44,31 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
+from renderers.caustics_mapping.camera_backfaces import CameraBackFaces
+from renderers.caustics_mapping.caustic_trace import ESTIMATORS, MaterialTable, TraceOptions
 from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup, look_at
 from renderers.caustics_mapping.meshes import GpuMesh
+from renderers.caustics_mapping.receiver_positions import ReceiverPositions
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
 from scenes.geometry import SceneGeometry
-from scenes.model import Camera, ConductorMaterial, DielectricMaterial
+from scenes.model import Camera
 
-__all__ = ["CameraInputs", "camera_matrix", "render_camera"]
+__all__ = ["CameraInputs", "camera_matrix", "pixel_width", "render_camera"]
+
+
+def _tangents(camera: Camera) -> tuple[float, float]:
+    """tan of the half field of view along x and y."""
+    w, h = camera.resolution
+    t = math.tan(math.radians(camera.fov) / 2)
+    return (t, t * h / w) if camera.fov_axis == "x" else (t * w / h, t)
 
 
 def camera_matrix(camera: Camera) -> np.ndarray:
     """World -> clip of the scene camera (OpenGL conventions)."""
-    w, h = camera.resolution
     eye = np.asarray(camera.position, float)
     view = look_at(eye, np.asarray(camera.look_at) - eye, camera.up)
-    t = math.tan(math.radians(camera.fov) / 2)
-    tx, ty = (t, t * h / w) if camera.fov_axis == "x" else (t * w / h, t)
+    tx, ty = _tangents(camera)
     dist = np.linalg.norm(np.asarray(camera.look_at) - eye)
     near, far = dist * 1e-3, dist * 1e2
     proj = np.zeros((4, 4))
@@ -36,29 +79,98 @@ def camera_matrix(camera: Camera) -> np.ndarray:
     return proj @ view
 
 
-@dataclass(eq=False)
+def pixel_width(camera: Camera) -> float:
+    """Width of one camera pixel at unit distance along the view axis (a tangent)."""
+    return 2 * _tangents(camera)[0] / camera.resolution[0]
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
 class CameraInputs:
-    """What the camera pass reads (None where the pass that makes it did not run)."""
+    """What the camera pass reads (None where the pass that makes it did not run).
+
+    Attributes
+    ----------
+    shadow_map : moderngl.Texture or None
+        RG32F shadow-map atlas (``shadow_map.glsl``), ``shadow_size`` texels per face.
+    caustic_map : moderngl.Texture or None
+        RGBA32F caustic-map atlas, rgb irradiance (W/m^2), ``caustic_size`` per face.
+    positions : ReceiverPositions
+        The light's receiver positions, normals (and (u, v)) atlases.
+    back : CameraBackFaces or None
+        Pass 5a's back faces from the camera (with ``refraction.double``).
+    materials : MaterialTable
+        Per-object material codes, IORs, absorption, reflectance, Fresnel flags (the
+        caustic trace's table: absorption and Fresnel already gated by the effects).
+    options : TraceOptions
+        The estimator settings (``caustic_trace.trace_options`` of the settings).
+    direct : bool
+        The scene has direct lighting.
+    shadow_bias : float
+        Shadow-test bias (m).
+    dispersion : bool
+        One path per channel, each with its channel's IOR.
+    all_paths : bool
+        ``settings.all_specular_paths``: total internal reflection reflects inside
+        (else the chain ends there: black).
+    """
 
     shadow_map: moderngl.Texture | None
     shadow_size: int
     caustic_map: moderngl.Texture | None
     caustic_size: int
-    positions: moderngl.Texture | None
-    positions_size: int
+    positions: ReceiverPositions
+    back: CameraBackFaces | None
+    materials: MaterialTable
+    options: TraceOptions
     direct: bool
     shadow_bias: float
+    dispersion: bool = False
+    all_paths: bool = False
 
 
-def _plane(geometry: SceneGeometry) -> tuple[float, float, float, float]:
-    """Least-squares plane of receiver 0 (normal along its mean vertex normal)."""
-    mesh = geometry.receivers[0].mesh
-    p = mesh.positions.astype(np.float64)
-    c = p.mean(axis=0)
-    n = np.linalg.svd(p - c, full_matrices=False)[2][-1]
-    if n @ mesh.normals.mean(axis=0) < 0:
-        n = -n
-    return (*n.tolist(), float(n @ c))
+def _albedo_table(ctx: moderngl.Context, geometry: SceneGeometry) -> moderngl.Texture:
+    """RGBA32F (receivers, 1): rgb albedo of each receiver (a pooled texture)."""
+    albedos = np.zeros((1, len(geometry.receivers), 4), np.float32)
+    albedos[0, :, :3] = [g.albedo for g in geometry.receivers]
+    table = pool(ctx).texture((len(geometry.receivers), 1))
+    table.write(albedos.tobytes())
+    return table
+
+
+def _set_common(program: moderngl.Program, light: LightSetup, camera: Camera,
+                inputs: CameraInputs) -> None:
+    set_light_uniforms(program, light)
+    set_uniform(program, "u_camera_vp", camera_matrix(camera).T.astype(np.float32))
+    set_uniform(program, "u_eye", tuple(float(x) for x in camera.position))
+    set_uniform(program, "u_direct", int(inputs.direct))
+    set_uniform(program, "u_shadows", int(inputs.shadow_map is not None))
+    set_uniform(program, "u_caustics", int(inputs.caustic_map is not None))
+    set_uniform(program, "u_shadow_size", inputs.shadow_size)
+    set_uniform(program, "u_shadow_bias", inputs.shadow_bias)
+    set_uniform(program, "u_caustic_size", inputs.caustic_size)
+    set_uniform(program, "u_positions_size", inputs.positions.size)
+
+
+def _ray_scale(geometry: SceneGeometry) -> float:
+    """First probe (m) of the bracketed secant where a ray's origin sees no receiver:
+    1/8 of the receivers' bounding-box diagonal (doubled up to 128 times it)."""
+    points = np.concatenate([g.mesh.positions for g in geometry.receivers]).astype(float)
+    return float(np.linalg.norm(np.ptp(points, axis=0))) / 8
+
+
+def _set_object(program: moderngl.Program, camera: Camera, inputs: CameraInputs,
+                ray_scale: float) -> None:
+    o = inputs.options
+    for name, value in (
+        ("u_ray_scale", ray_scale),
+        ("u_viewport", tuple(int(x) for x in camera.resolution)),
+        ("u_pixel_width", pixel_width(camera)),
+        ("u_iterations", o.iterations), ("u_eps", float(o.eps)),
+        ("u_start", int(o.start == "fixed")),
+        ("u_start_distance", float(o.start_distance)), ("u_verify", int(o.verify)),
+        ("u_hit_tolerance", float(o.hit_tolerance or 0.0)),
+    ):
+        set_uniform(program, name, value)
 
 
 def render_camera(
@@ -70,60 +182,72 @@ def render_camera(
     resources = pool(ctx)
     color = resources.texture((w, h))
     depth = resources.depth_texture((w, h))
+    albedos = _albedo_table(ctx, geometry)
     fbo = resources.framebuffer([color], depth)
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
     ctx.enable(moderngl.DEPTH_TEST)
     ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
-    vp = camera_matrix(camera).T.astype(np.float32)
-    programs = [load_program(ctx, "camera.glsl"),
-                load_program(ctx, "camera.glsl", defines={"OBJECT": 1})]
-    for program in programs:
-        set_light_uniforms(program, light)
-        set_uniform(program, "u_camera_vp", vp)
-        set_uniform(program, "u_eye", tuple(float(x) for x in camera.position))
-        set_uniform(program, "u_direct", int(inputs.direct))
-        set_uniform(program, "u_shadows", int(inputs.shadow_map is not None))
-        set_uniform(program, "u_caustics", int(inputs.caustic_map is not None))
-        set_uniform(program, "u_shadow_size", inputs.shadow_size)
-        set_uniform(program, "u_shadow_bias", inputs.shadow_bias)
-        set_uniform(program, "u_caustic_size", inputs.caustic_size)
-        set_uniform(program, "u_positions_size", inputs.positions_size)
-        for unit, (name, tex) in enumerate((("u_shadow_map", inputs.shadow_map),
-                                            ("u_caustic_map", inputs.caustic_map),
-                                            ("u_positions", inputs.positions))):
+    back = inputs.back
+    ray_scale = _ray_scale(geometry)
+    textures = (("u_shadow_map", inputs.shadow_map), ("u_caustic_map", inputs.caustic_map),
+                ("u_positions", inputs.positions.positions),
+                ("u_receiver_normals", inputs.positions.normals), ("u_albedos", albedos),
+                ("u_back_positions", back.positions if back else None),
+                ("u_back_normals", back.normals if back else None))
+    for unit, (_, tex) in enumerate(textures):
+        if tex is not None:
+            tex.use(location=unit)
+
+    def program_for(defines: dict[str, int] | None) -> moderngl.Program:
+        program = load_program(ctx, "camera.glsl", defines=defines)
+        _set_common(program, light, camera, inputs)
+        for unit, (name, tex) in enumerate(textures):
             if tex is not None:
-                tex.use(location=unit)
                 set_uniform(program, name, unit)
-    receiver_program, object_program = programs
+        if defines:
+            _set_object(program, camera, inputs, ray_scale)
+        return program
+
+    receiver_program = program_for(None)
     for index, (mesh, geo) in enumerate(zip(receivers, geometry.receivers, strict=False)):
         set_uniform(receiver_program, "u_receiver", index)
         set_uniform(receiver_program, "u_albedo", tuple(float(x) for x in geo.albedo))
         vao = mesh.vertex_array(receiver_program)
         vao.render(moderngl.TRIANGLES)
         vao.release()
-    set_uniform(object_program, "u_plane", _plane(geometry))
-    set_uniform(object_program, "u_plane_albedo",
-                tuple(float(x) for x in geometry.receivers[0].albedo))
-    for mesh, geo in zip(objects, geometry.objects, strict=False):
-        material = geo.material
-        if isinstance(material, DielectricMaterial):
-            set_uniform(object_program, "u_material", 1)
-            set_uniform(object_program, "u_ior", float(material.iors[1]))
-        elif isinstance(material, ConductorMaterial):
-            set_uniform(object_program, "u_material", 3)
-            set_uniform(object_program, "u_reflectance",
-                        tuple(float(x) for x in material.reflectance))
-        else:
-            set_uniform(object_program, "u_material", 3)
-            set_uniform(object_program, "u_reflectance", (0.0, 0.0, 0.0))
-        # Back faces are drawn too: culling them (meshes.back_faces_hidden) would
-        # halve this draw's cost but changed 1-3 silhouette pixels per image where a
-        # back face ties the front face in depth (bunny 700 x 700, high_ior_tir).
-        vao = mesh.vertex_array(object_program)
+    # Depth pre-pass of the objects, then each object pixel is shaded only by the
+    # nearest fragments (depth test <=; the shading was 1.8x the pixels on the
+    # sphere without it). Back faces are drawn in both: culling them
+    # (meshes.back_faces_hidden) changed 1-3 silhouette pixels per image where a
+    # back face ties the front face in depth (bunny 700 x 700, high_ior_tir); at such
+    # a tie the fragment drawn last is kept.
+    depth_program = load_program(ctx, "camera.glsl", defines={"DEPTH_ONLY": 1})
+    set_uniform(depth_program, "u_camera_vp", camera_matrix(camera).T.astype(np.float32))
+    for mesh in objects:
+        vao = mesh.vertex_array(depth_program)
         vao.render(moderngl.TRIANGLES)
         vao.release()
+    ctx.depth_func = "<="
+    table, options = inputs.materials, inputs.options
+    for index, mesh in enumerate(objects):
+        program = program_for({"OBJECT": 1, "MATERIAL": table.code[index],
+                               "DISPERSION": int(inputs.dispersion),
+                               "ALL_PATHS": int(inputs.all_paths),
+                               "FILTERED": int(options.filtered),
+                               "ESTIMATOR": ESTIMATORS[options.estimator],
+                               "SAFEGUARDED": int(options.safeguarded)})
+        set_uniform(program, "u_object", index)
+        set_uniform(program, "u_ior", tuple(float(x) for x in table.ior[index]))
+        set_uniform(program, "u_absorption", tuple(float(x) for x in table.absorption[index]))
+        set_uniform(program, "u_reflectance",
+                    tuple(float(x) for x in table.reflectance[index]))
+        set_uniform(program, "u_fresnel", int(table.fresnel[index]))
+        vao = mesh.vertex_array(program)
+        vao.render(moderngl.TRIANGLES)
+        vao.release()
+    ctx.depth_func = "<"
     image = np.frombuffer(color.read(), np.float32).reshape(h, w, 4)[::-1, :, :3].copy()
-    resources.give_back(color)
-    resources.give_back(depth)
+    for texture in (color, depth, albedos):
+        resources.give_back(texture)
     return image

@@ -3,7 +3,8 @@
 For each point sample of the light: receiver positions from the light, object
 surfaces (front; back for double refraction), one caustic trace per channel, the
 caustic map (optionally low-passed) and the receivers' (u, v) maps, the shadow map,
-and the camera pass. Each pass is a module of its own with its GLSL beside it;
+the back faces from the camera (once per frame, for double refraction) and the
+camera pass. Each pass is a module of its own with its GLSL beside it;
 this module only orders them and keeps the sums (:class:`Accumulator`).
 """
 
@@ -15,7 +16,11 @@ from dataclasses import dataclass, field
 import moderngl
 import numpy as np
 
-from renderers.caustics_mapping.camera import CameraInputs, render_camera
+from renderers.caustics_mapping.camera import CameraInputs, camera_matrix, render_camera
+from renderers.caustics_mapping.camera_backfaces import (
+    CameraBackFaces,
+    render_camera_backfaces,
+)
 from renderers.caustics_mapping.caustic_splat import SplatOptions, splat_caustic_map
 from renderers.caustics_mapping.caustic_trace import (
     Trace,
@@ -92,6 +97,8 @@ class FrameState:
     timer: PassTimer
     setup: SceneSetup
     acc: Accumulator
+    #: The back faces from the camera (pass 5a), rendered once per frame on first use.
+    camera_back: CameraBackFaces | None = None
 
 
 def newton_eps(scene: Scene, geometry: SceneGeometry) -> float:
@@ -198,8 +205,12 @@ def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: i
                                        faces=faces)
         acc.ran("shadow_map")
     diag = float(np.linalg.norm(np.ptp(setup.points, axis=0)))
-    inputs = CameraInputs(shadow, s.shadow_map, caustic, s.caustic_map, positions.positions,
-                          s.positions_map, scene.info.direct_lighting, 1e-3 * diag)
+    inputs = CameraInputs(
+        shadow_map=shadow, shadow_size=s.shadow_map, caustic_map=caustic,
+        caustic_size=s.caustic_map, positions=positions, back=_camera_back(state),
+        materials=setup.materials, options=trace_options(s, setup.eps),
+        direct=scene.info.direct_lighting, shadow_bias=1e-3 * diag,
+        dispersion="dispersion" in state.effects, all_paths=s.all_specular_paths)
     with timer.measure("camera"):
         acc.camera += render_camera(ctx, light, camera=scene.camera, geometry=geometry,
                                     receivers=setup.receivers, objects=setup.objects,
@@ -221,6 +232,22 @@ def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: i
     for texture in (caustic, shadow):
         if texture is not None:
             resources.give_back(texture)
+
+
+def _camera_back(state: FrameState) -> CameraBackFaces | None:
+    """Pass 5a, the closed dielectrics' back faces from the camera (with
+    ``refraction.double``): rendered on the frame's first light sample, kept for the
+    others (the camera does not move between them); the frame's end returns it."""
+    if "refraction.double" not in state.effects or not state.setup.closed:
+        return None
+    if state.camera_back is None:
+        camera = state.scene.camera
+        with state.timer.measure("camera_backfaces"):
+            state.camera_back = render_camera_backfaces(
+                state.ctx, view_proj=camera_matrix(camera), size=camera.resolution,
+                objects=state.setup.objects, which=state.setup.closed)
+        state.acc.ran("camera_backfaces")
+    return state.camera_back
 
 
 def _trace_objects(state: FrameState, light: LightSetup, *, positions):
