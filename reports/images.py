@@ -36,12 +36,16 @@ __all__ = [
     "encode_png",
     "encode_rgbe_stack",
     "false_colour_png",
+    "float32_base64",
+    "lookup_table",
     "mask_png",
     "tonemapped_png",
 ]
 
 #: Colormaps of each map kind (shared with the colour bars).
 COLORMAPS = {"signed": "RdBu_r", "ssim": "viridis", "flip": "magma"}
+#: Colormap of the page's false-colour view of linear images (log luminance).
+IRRADIANCE_COLORMAP = "inferno"
 
 
 def encode_png(rgb: np.ndarray, *, compress_level: int = 6) -> bytes:
@@ -55,6 +59,20 @@ def encode_png(rgb: np.ndarray, *, compress_level: int = 6) -> bytes:
 def data_uri(data: bytes, *, mime: str = "image/png") -> str:
     """``data:`` URI of ``data`` (base64)."""
     return f"data:{mime};base64,{base64.b64encode(data).decode('ascii')}"
+
+
+def float32_base64(values: np.ndarray) -> str:
+    """Base64 of ``values`` as little-endian float32, C order (what the page's
+    JavaScript reads back into a ``Float32Array``: 4 bytes per value, 4/3 of that
+    in base64)."""
+    return base64.b64encode(np.ascontiguousarray(values, "<f4").tobytes()).decode("ascii")
+
+
+def lookup_table(colormap: str = IRRADIANCE_COLORMAP, *, size: int = 256) -> bytes:
+    """``size`` RGB byte triplets of ``colormap`` from 0 to 1, drawn with
+    :func:`false_colour`, so the page's false colour is the Python one."""
+    ramp = np.linspace(0.0, 1.0, size)[None, :]
+    return false_colour(ramp, vmin=0.0, vmax=1.0, colormap=colormap).tobytes()
 
 
 def downsample(image: np.ndarray, *, max_size: int) -> tuple[np.ndarray, int]:

@@ -46,9 +46,10 @@ def caustic_blob(shape, *, centre, sigma, peak, rng, noise=0.0, background=0.05)
     return np.maximum(image, 0).astype(np.float32)
 
 
-def _view(prefix, shape, rng, *, shift, scale, object_mask=False):
+def _view(prefix, shape, rng, *, shift, scale, object_mask=False, variance=False):
     """Images and metrics of one view: reference, an independent reference seed
-    (for the noise floor) and the shifted, scaled method."""
+    (for the noise floor) and the shifted, scaled method; with ``variance``, the
+    reference's ``Var[mean]`` of its noise model, (0.05 × noiseless value)²."""
     h, w = shape
     centre = (h * 0.55, w * 0.45)
     sigma = min(h, w) / 9
@@ -72,6 +73,9 @@ def _view(prefix, shape, rng, *, shift, scale, object_mask=False):
               f"{prefix}/flip": flip_map.astype(np.float32), f"{prefix}/mask_caustic": caustic}
     if obj is not None:
         images[f"{prefix}/mask_object"] = obj
+    if variance:
+        clean = caustic_blob(shape, centre=centre, sigma=sigma, peak=8.0, rng=rng)
+        images[f"{prefix}/reference_variance"] = ((0.05 * clean) ** 2).astype(np.float32)
     regions = {"full": None, "caustic": caustic}
     if obj is not None:
         regions["object_masked"] = ~obj
@@ -129,13 +133,15 @@ def cost_table(rng) -> tuple[Table, float, float]:
 def make_comparison(*, name: str = "glass_sphere",
                     description: str = "Glass sphere over a diffuse floor, point light",
                     camera: tuple[int, int] = (96, 128), receiver: tuple[int, int] = (64, 64),
-                    seed: int = 0, thresholds: bool = True) -> SceneComparison:
-    """A complete comparison of one synthetic scene (camera image + one receiver map)."""
+                    seed: int = 0, thresholds: bool = True,
+                    variance: bool = False) -> SceneComparison:
+    """A complete comparison of one synthetic scene (camera image + one receiver map);
+    ``variance`` adds ``<view>/reference_variance`` to both views."""
     rng = np.random.default_rng(seed)
     cam_images, cam_metrics, cam_white, cam_range = _view(
-        "camera", camera, rng, shift=3, scale=1.1, object_mask=True)
+        "camera", camera, rng, shift=3, scale=1.1, object_mask=True, variance=variance)
     rec_images, rec_metrics, rec_white, rec_range = _view(
-        "receiver0", receiver, rng, shift=2, scale=0.9)
+        "receiver0", receiver, rng, shift=2, scale=0.9, variance=variance)
     metrics = tuple(cam_metrics + rec_metrics)
     cost, method_time, method_error = cost_table(rng)
     reference = [row for row in cost.records() if row["series"] == "reference"]

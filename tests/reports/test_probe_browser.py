@@ -1,0 +1,426 @@
+"""Probing, zoom, display modes and profiles of the report's images, in headless
+Chromium (Debian's ``chromium``, driven by Playwright) on file:// pages, linked and
+self-contained, plus the float data the pages get (no browser needed).
+
+The comparison is synthetic with known data (``tests.reports.conftest``, with the
+reference's variance); its EXRs are written by the harness's own writer
+(``harness.compare.outputs.write_comparison``) beside the linked page, and every value
+the page shows is checked against what those EXRs hold. Skipped with the reason when
+Chromium or playwright is missing (a failure under CI), as ``test_browser.py``.
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import json
+import re
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from harness.compare.outputs import write_comparison
+from renderers.exr import read_exr
+from reports import build_report, images
+from reports.display import LUMA
+from reports.profiles import line_pixels
+from tests.conftest import REPO
+from tests.reports.temporal_helpers import launch_browser
+from tests.reports.test_browser import PageLog
+
+ARTIFACTS = REPO / "test-artifacts"
+SCENE = "glass_sphere-paper"
+
+
+KINDS = ("method", "reference", "signed", "ssim", "flip")
+
+
+@pytest.fixture(scope="module")
+def known(comparison_factory):
+    """A comparison with the reference's variance on both views (96×128 camera,
+    64×64 receiver map), naming every EXR as ``caustics compare`` does."""
+    c = comparison_factory(variance=True, seed=4)
+    return replace(c, files={f"{view}/{kind}": f"{view}_{kind}.exr"
+                             for view in ("camera", "receiver0") for kind in KINDS})
+
+
+@pytest.fixture(scope="module")
+def pages(tmp_path_factory, known) -> dict[str, Path]:
+    """The scene page, linked and self-contained, with the EXRs beside both."""
+    out = {}
+    for mode, embed in (("linked", False), ("embedded", True)):
+        root = tmp_path_factory.mktemp(f"probe-{mode}")
+        write_comparison(root / SCENE, known)
+        build_report(root, [known], self_contained=embed)
+        out[mode] = root / SCENE / "index.html"
+    return out
+
+
+@pytest.fixture(scope="module")
+def exr(pages):
+    """The EXR originals as written, by ``<view>/<kind>``."""
+    folder = pages["linked"].parent
+    return {f"{view}/{kind}": read_exr(folder / f"{view}_{kind}.exr")["RGB"]
+            for view in ("camera", "receiver0") for kind in KINDS}
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):
+    with launch_browser(tmp_path_factory.mktemp("chromium-profile")) as context:
+        yield context
+
+
+# ---- the data the page gets -------------------------------------------------------
+
+def _page_data(script: str) -> dict:
+    """The object a ``data_<view>.js`` script assigns, with its layers decoded."""
+    data = json.loads(re.search(r"\] = (\{.*\});\s*$", script, re.S).group(1))
+    h, w = data["height"], data["width"]
+    for name, layer in data["layers"].items():
+        values = np.frombuffer(base64.b64decode(layer["base64"]), "<f4")
+        data["layers"][name] = values.reshape(h, w, layer["channels"]).squeeze()
+    return data
+
+
+def test_the_page_data_are_the_images_as_shown(pages, known):
+    """``data_<view>.js`` holds method, reference, SSIM and FLIP as float32, exactly
+    the comparison's (receiver maps flipped as shown), and the reference's standard
+    error sqrt(Var); the self-contained page carries the same scripts inline."""
+    folder = pages["linked"].parent
+    embedded = pages["embedded"].read_text("utf-8")
+    for view, flip in (("camera", False), ("receiver0", True)):
+        script = (folder / f"data_{view}.js").read_text("utf-8")
+        assert script in embedded
+        data = _page_data(script)
+        assert data["factor"] == 1
+        for name in ("method", "reference", "ssim", "flip"):
+            expected = np.asarray(known.images[f"{view}/{name}"], np.float32)
+            assert np.array_equal(data["layers"][name], expected[::-1] if flip else expected)
+        variance = np.asarray(known.images[f"{view}/reference_variance"], np.float64)
+        se = np.sqrt(variance[::-1] if flip else variance).astype(np.float32)
+        assert np.array_equal(data["layers"]["reference_se"], se)
+
+
+def test_previews_box_filtered_down_ship_box_means(tmp_path, comparison_factory):
+    """A view shown f× smaller ships the f×f means, and the standard error of a mean
+    of f² independent pixels, sqrt(mean(Var) / f²)."""
+    c = comparison_factory(camera=(40, 60), receiver=(32, 32), variance=True)
+    build_report(tmp_path, [c], preview_size=20)
+    data = _page_data((tmp_path / SCENE / "data_camera.js").read_text("utf-8"))
+    assert (data["factor"], data["height"], data["width"]) == (3, 13, 20)
+    method = np.asarray(c.images["camera/method"], np.float64)[:39, :60]
+    means = method.reshape(13, 3, 20, 3, 3).mean(axis=(1, 3))
+    assert np.allclose(data["layers"]["method"], means, rtol=1e-6)
+    variance = np.asarray(c.images["camera/reference_variance"], np.float64)[:39, :60]
+    se = np.sqrt(variance.reshape(13, 3, 20, 3, 3).sum(axis=(1, 3)) / 9**2)
+    assert np.allclose(data["layers"]["reference_se"], se, rtol=1e-6)
+
+
+# ---- in the browser ---------------------------------------------------------------
+
+def _open(browser, path: Path):
+    page = browser.new_page()
+    log = PageLog(page)
+    page.goto(path.as_uri(), wait_until="load")
+    # Polled from here: wait_for_function evaluates with eval(), which the CSP refuses.
+    deadline = time.monotonic() + 30
+    while page.evaluate("document.body.dataset.hdrReady") is None:
+        assert time.monotonic() < deadline, "the page's images never got ready"
+        page.wait_for_timeout(50)
+    assert page.evaluate("document.body.dataset.hdrReady") == "true"
+    return page, log
+
+
+def _layer(view: str, panel: str) -> str:
+    return f'#view-{view} .viewport[data-panel="{panel}"] .zoom'
+
+
+def _point(page, view: str, panel: str, x: float, y: float) -> tuple[float, float]:
+    """Page coordinates of display pixel (x, y)'s centre on a panel, scrolled into the
+    middle of the window (clear of the sticky controls)."""
+    selector = _layer(view, panel)
+    page.locator(selector).evaluate(
+        "(e) => e.parentElement.scrollIntoView({block: 'center'})")
+    box = page.locator(selector).bounding_box()
+    w, h = page.evaluate(f"window.causticsData[{json.dumps(view)}].width"), page.evaluate(
+        f"window.causticsData[{json.dumps(view)}].height")
+    return box["x"] + (x + 0.5) * box["width"] / w, box["y"] + (y + 0.5) * box["height"] / h
+
+
+def _probe(page) -> dict:
+    state = page.evaluate("""() => {
+        const box = document.getElementById('probe');
+        const rows = {};
+        box.querySelectorAll('tr[data-layer]').forEach((r) => {
+            rows[r.dataset.layer] = r.dataset.values ? JSON.parse(r.dataset.values) : null;
+        });
+        return {hidden: box.hidden, text: box.textContent, rows: rows,
+                dataset: Object.assign({}, box.dataset)};
+    }""")
+    assert not state["hidden"]
+    return state
+
+
+def _canvas(page, selector: str) -> np.ndarray:
+    w, h, values = page.evaluate("""(selector) => {
+        const c = document.querySelector(selector);
+        return [c.width, c.height,
+                Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data)];
+    }""", selector)
+    return np.asarray(values, np.uint8).reshape(h, w, 4)
+
+
+@pytest.mark.parametrize("mode", ["linked", "embedded"])
+def test_hovering_shows_the_exr_values(browser, pages, known, exr, mode):
+    """On every panel of both views, hovering a pixel shows the method, reference and
+    difference values of the EXRs (float32 equal, per channel, and their luminance),
+    the reference's standard error sqrt(Var), the SSIM and FLIP there, the EXR pixel
+    (receiver rows flipped back) and the units; no console error, nothing requested
+    off the machine."""
+    page, log = _open(browser, pages[mode])
+    units = {"camera": "W m⁻² sr⁻¹", "receiver0": "W/m²"}
+    for view in ("camera", "receiver0"):
+        height, width = known.images[f"{view}/reference"].shape[:2]
+        lum = known.images[f"{view}/reference"] @ LUMA
+        peak_y, peak_x = np.unravel_index(np.argmax(lum), lum.shape)
+        shown_peak = (int(peak_x), int(height - 1 - peak_y if view != "camera" else peak_y))
+        panels = page.evaluate(f"""Array.from(document.querySelectorAll(
+            '#view-{view} .viewport')).map((v) => v.dataset.panel)""")
+        assert set(panels) == {"method", "reference", "signed", "ssim", "flip", "regions", "ab"}
+        for panel, (x, y) in zip(panels, [shown_peak, (0, 0), (width - 1, height - 1),
+                                          (7, 3), shown_peak, (width // 2, 5), (11, 13)],
+                                     strict=True):
+            page.mouse.move(*_point(page, view, panel, x, y))
+            state = _probe(page)
+            ey = height - 1 - y if view != "camera" else y
+            assert (state["dataset"]["view"], state["dataset"]["x"], state["dataset"]["y"]) \
+                == (view, str(x), str(y)), panel
+            assert state["dataset"]["exr"] == f"{x} {x} {ey} {ey}"
+            rows = state["rows"]
+            for name, kind in (("method", "method"), ("reference", "reference"),
+                               ("difference", "signed")):
+                expected = exr[f"{view}/{kind}"][ey, x]
+                assert np.array_equal(np.float32(rows[name][:3]), expected), (panel, name)
+                assert rows[name][3] == pytest.approx(float(expected @ LUMA), rel=1e-6, abs=1e-9)
+            variance = np.float64(known.images[f"{view}/reference_variance"][ey, x])
+            assert np.array_equal(np.float32(rows["reference_se"][:3]),
+                                  np.sqrt(variance).astype(np.float32))
+            assert rows["reference_se"][3] == pytest.approx(float(np.sqrt(variance) @ LUMA))
+            for name in ("ssim", "flip"):
+                assert np.float32(float(state["dataset"][name])) == exr[f"{view}/{name}"][ey, x, 0]
+            shown = page.evaluate("(v) => window.causticsReport.format(v)", rows["method"][0])
+            assert shown in state["text"] and units[view] in state["text"]
+            squares = page.evaluate(f"""Array.from(document.querySelectorAll(
+                '#view-{view} rect.probe-mark')).map((r) => [r.getAttribute('x'),
+                r.getAttribute('y')])""")
+            assert squares == [[str(x), str(y)]] * 7
+    if mode == "linked":
+        assert any(r.endswith("/data_camera.js") for r in log.requests), log.requests
+    assert all(r.startswith(("file:", "data:")) for r in log.requests), log.requests
+    log.assert_clean()
+    page.close()
+
+
+def _drag(page, start, end, *, shift: bool) -> None:
+    if shift:
+        page.keyboard.down("Shift")
+    page.mouse.move(*start)
+    page.mouse.down()
+    page.mouse.move(*end, steps=6)
+    page.mouse.up()
+    if shift:
+        page.keyboard.up("Shift")
+
+
+def _samples(page, view: str) -> dict:
+    return page.evaluate(f"""JSON.parse(document.querySelector(
+        '#view-{view} .profile svg.profile-svg').dataset.samples)""")
+
+
+def _check_samples(samples, exr, known, view, *, start, end):
+    """The plotted samples are the data along the line, pixel for pixel."""
+    height = known.images[f"{view}/reference"].shape[0]
+    xs, ys = line_pixels(start, end)
+    assert samples["displayX"] == xs.tolist() and samples["displayY"] == ys.tolist()
+    ey = height - 1 - ys if view != "camera" else ys
+    assert samples["x"] == xs.tolist() and samples["y"] == ey.tolist()
+    for name in ("method", "reference"):
+        expected = exr[f"{view}/{name}"][ey, xs]
+        assert np.array_equal(np.float32(samples[name]), expected), name
+        assert np.allclose(samples[f"{name}Lum"], expected.astype(np.float64) @ LUMA, rtol=1e-6)
+    se = np.sqrt(np.float64(known.images[f"{view}/reference_variance"][ey, xs]))
+    assert np.array_equal(np.float32(samples["stderr"]), se.astype(np.float32))
+    assert np.allclose(samples["stderrLum"], se @ LUMA, rtol=1e-6)
+
+
+@pytest.mark.parametrize("mode", ["linked", "embedded"])
+def test_a_dragged_profile_plots_the_data(browser, pages, known, exr, mode):
+    """Shift+drag on a panel plots method and reference along the line, with the
+    reference's ±2σ band, and the plotted samples are the EXRs' values there; with
+    "drag draws a profile" ticked a plain drag does it too and nothing pans; the
+    receiver map's default profile is the CSV written beside the page."""
+    page, log = _open(browser, pages[mode])
+    default = _samples(page, "receiver0")
+    with open(pages["linked"].parent / "profile_receiver0.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [int(r["x"]) for r in rows] == default["x"]
+    assert [int(r["y"]) for r in rows] == default["y"]
+    for channel, c in (("r", 0), ("g", 1), ("b", 2)):
+        assert np.array_equal(np.float32([float(r[f"reference_{channel}"]) for r in rows]),
+                              np.float32([s[c] for s in default["reference"]]))
+    assert np.allclose([float(r["reference_se_lum"]) for r in rows], default["stderrLum"],
+                       rtol=1e-7)
+
+    start, end = (5, 80), (120, 10)
+    _drag(page, _point(page, "camera", "reference", *start),
+          _point(page, "camera", "reference", *end), shift=True)
+    samples = _samples(page, "camera")
+    _check_samples(samples, exr, known, "camera", start=start, end=end)
+    n = len(samples["x"])
+    counts = page.evaluate("""Array.from(document.querySelectorAll(
+        '#view-camera .profile-svg [data-series]')).map((e) =>
+        [e.dataset.series, e.getAttribute('points').trim().split(/ +/).length])""")
+    assert dict(counts) == {"reference ± 2σ": 2 * n, "reference": n, "method": n}
+    lines = page.evaluate("""Array.from(document.querySelectorAll(
+        '#view-camera line.profile-line')).map((l) => ['x1', 'y1', 'x2', 'y2'].map(
+        (a) => parseFloat(l.getAttribute(a))))""")
+    assert lines == [[5.5, 80.5, 120.5, 10.5]] * 7
+    assert page.locator("#view-camera").get_attribute("data-zoom") == "1 0 0"
+    link = page.locator("#view-camera a.profile-download")
+    assert link.get_attribute("href").startswith("data:text/csv")
+
+    page.locator("#profile-mode").check()
+    start, end = (3, 60), (60, 3)
+    _drag(page, _point(page, "receiver0", "signed", *start),
+          _point(page, "receiver0", "signed", *end), shift=False)
+    _check_samples(_samples(page, "receiver0"), exr, known, "receiver0", start=start, end=end)
+    assert page.locator("#view-receiver0").get_attribute("data-zoom") == "1 0 0"
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.locator("#view-camera").screenshot(path=str(ARTIFACTS / f"report-profile-{mode}.png"))
+    log.assert_clean()
+    page.close()
+
+
+def test_log_and_false_colour_views(browser, pages, known):
+    """The display toggle redraws every view from the float data: log shows
+    g = clamp((log10 L − lo) / 4, 0, 1) as grey with lo = log10(peak / 2^stops) − 4,
+    peak the reference's largest luminance, false colour the same g through the
+    colormap table; the exposure shifts it; the colour bar and the profile's axis
+    follow; the A/B image shows the same pixels."""
+    page, log = _open(browser, pages["linked"])
+    selector = '#view-camera canvas.hdr[data-layer="method"]'
+    linear = _canvas(page, selector)
+    reference = np.asarray(known.images["camera/reference"], np.float32).astype(np.float64)
+    peak = float((reference @ LUMA).max())
+    assert float(page.locator("#view-camera").get_attribute("data-peak")) == pytest.approx(peak)
+    lum = np.asarray(known.images["camera/method"], np.float32).astype(np.float64) @ LUMA
+
+    def level(stops):
+        with np.errstate(divide="ignore"):
+            g = (np.log10(lum) - (np.log10(peak / 2**stops) - 4)) / 4
+        return np.round(255 * np.clip(np.nan_to_num(g, neginf=0.0), 0, 1)).astype(int)
+
+    page.locator('input[name="display-mode"][value="log"]').check()
+    shown = _canvas(page, selector)
+    assert not np.array_equal(shown, linear)
+    assert np.abs(shown[..., 0].astype(int) - level(0)).max() <= 1
+    assert np.array_equal(shown[..., 0], shown[..., 2])
+    assert page.locator("#view-camera .bar-low").text_content() == page.evaluate(
+        "(v) => window.causticsReport.format(v)", peak * 1e-4)
+    assert page.locator("#view-receiver0 .profile-svg").get_attribute("data-scale") == "log"
+    page.locator("#exposure").fill("2")
+    brighter = _canvas(page, selector)
+    assert np.abs(brighter[..., 0].astype(int) - level(2)).max() <= 1
+    assert brighter[..., 0].mean() > shown[..., 0].mean() + 10
+    page.locator("#exposure").fill("0")
+
+    page.locator('input[name="display-mode"][value="false-colour"]').check()
+    coloured = _canvas(page, selector)[..., :3].astype(int)
+    table = np.frombuffer(images.lookup_table(), np.uint8).reshape(256, 3).astype(int)
+    g = level(0)
+    near = [np.abs(coloured - table[np.clip(g + k, 0, 255)]).max(axis=-1) == 0
+            for k in (-1, 0, 1)]
+    assert np.all(np.any(near, axis=0))
+    assert np.mean(near[1]) > 0.99
+    page.locator("#view-camera input.ab-split").fill("100")
+    assert np.array_equal(_canvas(page, "#view-camera canvas.ab")[..., :3], coloured)
+    page.locator('input[name="display-mode"][value="linear"]').check()
+    assert np.array_equal(_canvas(page, selector), linear)
+    assert page.locator("#view-receiver0 .profile-svg").get_attribute("data-scale") == "linear"
+    log.assert_clean()
+    page.close()
+
+
+def _visible(page, view: str) -> list[list[float]]:
+    """Per viewport of a view: the zoom layer's box in units of the viewport's inner
+    size (inside its border)."""
+    return page.evaluate(f"""Array.from(document.querySelectorAll('#view-{view} .viewport'))
+        .map((v) => {{
+            const a = v.getBoundingClientRect(), edge = v.clientLeft;
+            const w = a.width - 2 * edge, h = a.height - 2 * edge;
+            const b = v.querySelector('.zoom').getBoundingClientRect();
+            return [(b.left - a.left - edge) / w, (b.top - a.top - edge) / h,
+                    b.width / w, b.height / h];
+        }})""")
+
+
+def test_zoom_and_pan_stay_in_sync(browser, pages, known):
+    """The wheel over one panel zooms every panel of its view alike (the A/B image,
+    twice as wide, included) about the pointer's pixel, and no other view; a drag pans
+    them together; the A/B split still follows the pointer in image units; a
+    double-click resets."""
+    page, log = _open(browser, pages["linked"])
+    where = _point(page, "camera", "method", 40, 30)
+    page.mouse.move(*where)
+    page.mouse.wheel(0, -600)
+    page.wait_for_timeout(100)
+    zooms = page.evaluate("""Array.from(document.querySelectorAll('#view-camera .zoom'))
+        .map((z) => z.dataset.zoom)""")
+    assert len(zooms) == 7 and len(set(zooms)) == 1
+    scale = float(zooms[0].split()[0])
+    assert scale == pytest.approx(np.exp(1.2), rel=1e-6)
+    boxes = np.array(_visible(page, "camera"))
+    assert np.allclose(boxes, boxes[0], atol=2e-3) and boxes[0, 2] == pytest.approx(scale, rel=1e-3)
+    page.mouse.move(where[0] + 1, where[1])
+    page.mouse.move(*where)
+    assert (_probe(page)["dataset"]["x"], _probe(page)["dataset"]["y"]) == ("40", "30")
+    # Scrolling a zoomed layer into view must not scroll its viewport out of step.
+    page.locator(_layer("camera", "reference")).evaluate(
+        "(e) => e.scrollIntoView({block: 'center'})")
+    assert np.allclose(_visible(page, "camera"), boxes, atol=2e-3)
+    assert set(page.evaluate("""Array.from(document.querySelectorAll('#view-receiver0 .zoom'))
+        .map((z) => z.dataset.zoom)""")) == {"1 0 0"}
+
+    start = _point(page, "camera", "reference", 45, 35)
+    _drag(page, start, (start[0] - 40, start[1] + 25), shift=False)
+    panned = np.array(_visible(page, "camera"))
+    assert np.allclose(panned, panned[0], atol=2e-3)
+    assert not np.allclose(panned[0], boxes[0], atol=1e-3)
+
+    ab = page.locator("#view-camera canvas.ab")
+    ab.evaluate("(e) => e.scrollIntoView({block: 'center'})")
+    layer = page.locator(_layer("camera", "ab")).bounding_box()
+    frame = page.locator('#view-camera .viewport[data-panel="ab"]').bounding_box()
+    x = frame["x"] + frame["width"] * 0.6
+    page.mouse.move(x, frame["y"] + frame["height"] / 2)
+    width = known.images["camera/method"].shape[1]
+    expected = width * (x - layer["x"]) / layer["width"]
+    assert int(ab.get_attribute("data-split")) == pytest.approx(expected, abs=1)
+    cut = int(ab.get_attribute("data-split"))
+    method = _canvas(page, '#view-camera canvas.hdr[data-layer="method"]')
+    reference = _canvas(page, '#view-camera canvas.hdr[data-layer="reference"]')
+    mixed = _canvas(page, "#view-camera canvas.ab")
+    assert np.array_equal(mixed[:, :cut], method[:, :cut])
+    assert np.array_equal(mixed[:, cut:], reference[:, cut:])
+
+    flip = page.locator('#view-camera .viewport[data-panel="flip"]')
+    flip.evaluate("(e) => e.scrollIntoView({block: 'center'})")
+    box = flip.bounding_box()
+    page.mouse.dblclick(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    assert set(page.evaluate("""Array.from(document.querySelectorAll('#view-camera .zoom'))
+        .map((z) => z.dataset.zoom)""")) == {"1 0 0"}
+    log.assert_clean()
+    page.close()
