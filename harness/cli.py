@@ -100,10 +100,14 @@ def _render_commands(subparsers) -> None:
     p.add_argument("scene", nargs="?", metavar="SCENE", help=_SCENES_HELP)
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     p.add_argument("--photons", type=int, help="photon budget per seed")
-    p.add_argument("--spp", type=int, help="ptracer samples per pixel per seed")
+    p.add_argument("--spp", type=int, help="camera samples per pixel per seed")
     p.add_argument("--seed", type=int, help="first random seed")
     p.add_argument("--seeds", type=int, help="number of independent seeds K")
     p.add_argument("--target-noise", type=float, help="stop at this relative noise")
+    p.add_argument("--camera", choices=("trace", "ptracer"), default="trace",
+                   help="camera image: the camera tracer, which sees through glass and "
+                   "water (default), or Mitsuba's ptracer, which renders specular surfaces "
+                   "and all seen through them black")
     _cache_options(p)
 
 

@@ -1,5 +1,8 @@
 """``caustics reference SCENE -o DIR``: render (or fetch from the cache) the Mitsuba
-reference and write ``camera.exr``, ``receiver_irradiance*.exr`` and ``result.json``."""
+reference and write ``camera.exr``, ``receiver_irradiance*.exr`` and ``result.json``.
+
+``--camera`` picks the camera image's integrator: ``trace`` (default, the camera
+tracer: glass and water are seen through) or ``ptracer``."""
 
 from __future__ import annotations
 
@@ -51,12 +54,13 @@ def reference(args: argparse.Namespace) -> int:
     # An unwritable cache must not cost the render: render without it (one warning).
     use_cache = not args.no_cache and usable_cache(cache_dir(args.cache_dir))
     result = render_reference(scene, cache=args.cache_dir, use_cache=use_cache,
-                              progress=not args.quiet)
+                              progress=not args.quiet, camera=args.camera)
     # The cache module writes result.json with json.dumps; hand it only finite numbers.
     document = write_result_dir(args.output, strict_result(result))
     if not args.quiet:
         print(f"{plain(scene.name)}: {document['photons']} photons x {document['seeds']} "
               f"seeds, relative noise {_number(document['relative_noise'], '.4f')} "
-              f"({document['stopped_by']}), cache {result.metadata.get('cache')}, "
+              f"({document['stopped_by']}), camera {document.get('camera_integrator')}, "
+              f"cache {result.metadata.get('cache')}, "
               f"wrote {plain(args.output)}", file=sys.stderr)
     return 0

@@ -25,9 +25,12 @@ else (truncated EXR, killed writer, garbage, a hand-edited JSON) is a miss:
 The key is the SHA-256 of the scene's physics: its fields less its file path and
 its name and description (renaming a scene re-uses its reference), only the
 reference's own settings (:data:`REFERENCE_SETTINGS`), the bytes of every mesh
-both renderers get, Mitsuba and Dr.Jit versions and variant, and
-:data:`FORMAT_VERSION`. Two processes rendering the same key serialise on an
-exclusive ``fcntl`` lock on ``KEY.lock``; the second finds the first's entry.
+both renderers get, Mitsuba and Dr.Jit versions and variant, the camera integrator
+(:data:`CAMERA_INTEGRATORS`: the camera tracer or ptracer) and :data:`FORMAT_VERSION`.
+An entry whose recorded ``camera_integrator`` is not the one asked for is a miss too
+(:func:`load_entry`), so the two camera images never stand in for each other. Two
+processes rendering the same key serialise on an exclusive ``fcntl`` lock on
+``KEY.lock``; the second finds the first's entry.
 """
 
 from __future__ import annotations
@@ -50,13 +53,15 @@ import numpy as np
 
 from renderers.exr import ExrError, read_exr, write_exr
 from renderers.results import ReceiverMap, RenderResult
+from scenes.errors import HarnessError
 from scenes.files import dumps_strict
 from scenes.geometry import build_geometry
 from scenes.model import Scene
 
-__all__ = ["FORMAT_VERSION", "STALE_AFTER", "CacheEntryError", "InvalidCacheEntryWarning",
-           "cache_dir", "cache_key", "entry_lock", "load_entry", "read_result_dir",
-           "receiver_file_name", "write_result_dir"]
+__all__ = ["CAMERA_INTEGRATORS", "FORMAT_VERSION", "STALE_AFTER", "CacheEntryError",
+           "CameraIntegratorError", "InvalidCacheEntryWarning", "cache_dir", "cache_key",
+           "check_camera", "entry_lock", "load_entry", "read_result_dir", "receiver_file_name",
+           "write_result_dir"]
 
 #: Bump when the renderer's output or the directory format changes meaning.
 #: 2: receiver maps hold caustic irradiance only; 3: traced with caustic-only
@@ -64,17 +69,33 @@ __all__ = ["FORMAT_VERSION", "STALE_AFTER", "CacheEntryError", "InvalidCacheEntr
 #: TEA-hashed PCG32 seeding (same expectation, new samples, less noise); 4: all-paths
 #: mode follows paths up to a 64-event safety cap (was 8) and records the cut flux;
 #: 5: the key leaves out the scene's name and description, result.json records each
-#: EXR's size and its own digest (``shapes``, ``document_sha256``)
-FORMAT_VERSION = 5
+#: EXR's size and its own digest (``shapes``, ``document_sha256``); 6: the camera image
+#: is the camera tracer's by default (``camera_integrator``, part of the key)
+FORMAT_VERSION = 6
 RESULT_JSON = "result.json"
 #: Seconds after which a temporary folder left by a killed writer is removed.
 STALE_AFTER = 3600.0
+#: Camera integrators of the reference (``render_reference(camera=...)``), and the name
+#: each records as ``camera_integrator`` in its metadata.
+CAMERA_INTEGRATORS = {"trace": "camera_trace", "ptracer": "ptracer"}
 #: Fields of ``[scene]`` that name or describe the scene but do not change its light.
 NON_PHYSICAL = ("name", "description")
 
 
 class CacheEntryError(ExrError):
     """A result directory or cache entry is incomplete or fails its schema."""
+
+
+class CameraIntegratorError(HarnessError, ValueError):
+    """A camera integrator that is not one of :data:`CAMERA_INTEGRATORS`."""
+
+
+def check_camera(camera: str) -> str:
+    """``camera`` if it names a camera integrator, else :class:`CameraIntegratorError`."""
+    if camera not in CAMERA_INTEGRATORS:
+        raise CameraIntegratorError(f"camera integrator {camera!r}: expected one of "
+                                    f"{', '.join(sorted(CAMERA_INTEGRATORS))}")
+    return camera
 
 
 class InvalidCacheEntryWarning(UserWarning):
@@ -106,13 +127,15 @@ REFERENCE_SETTINGS = ("receiver_map", "photons", "spp", "seed", "seeds", "target
                       "all_specular_paths")
 
 
-def cache_key(scene: Scene, versions: dict[str, str]) -> str:
+def cache_key(scene: Scene, versions: dict[str, str], *, camera: str = "trace") -> str:
     """Hex SHA-256 naming the reference of ``scene`` under these versions.
 
     The scene's physics only: its fields without the file path and without
     ``[scene]`` :data:`NON_PHYSICAL` (name, description), with only
-    :data:`REFERENCE_SETTINGS` of its settings, and the bytes of every mesh.
+    :data:`REFERENCE_SETTINGS` of its settings, and the bytes of every mesh; and
+    ``camera``, the camera integrator (a key of :data:`CAMERA_INTEGRATORS`).
     """
+    check_camera(camera)
     fields = _jsonable(dataclasses.replace(scene, source=""))
     for name in NON_PHYSICAL:
         fields["info"].pop(name, None)
@@ -121,8 +144,8 @@ def cache_key(scene: Scene, versions: dict[str, str]) -> str:
     fields.pop("animation", None)
     fields["settings"] = {k: fields["settings"][k] for k in REFERENCE_SETTINGS}
     digest = hashlib.sha256()
-    digest.update(json.dumps({"scene": fields, "versions": versions,
-                              "format": FORMAT_VERSION}, sort_keys=True).encode())
+    digest.update(json.dumps({"scene": fields, "versions": versions, "format": FORMAT_VERSION,
+                              "camera": CAMERA_INTEGRATORS[camera]}, sort_keys=True).encode())
     geometry = build_geometry(scene)
     for mesh in [r.mesh for r in geometry.receivers] + [o.mesh for o in geometry.objects]:
         for arr in (mesh.positions, mesh.normals, mesh.faces, mesh.uvs):
@@ -347,6 +370,7 @@ _OPTIONAL = {
     "camera_max_depth": _is_int,
     "camera_integrator": lambda v: isinstance(v, str),
     "camera_limits": _is_str_list,
+    "camera_lookup": lambda v: isinstance(v, dict),
     "scene": lambda v: isinstance(v, str),
 }
 
@@ -439,13 +463,15 @@ def read_result_dir(directory: str | Path) -> RenderResult:
     )
 
 
-def load_entry(root: Path, key: str) -> tuple[RenderResult | None, str]:
+def load_entry(root: Path, key: str, *, camera: str | None = None
+               ) -> tuple[RenderResult | None, str]:
     """The cached result for ``key`` and ``"hit"``, or None and why it missed.
 
-    A missing entry is ``"absent"``; an entry that fails :func:`read_result_dir` or
-    was stored under another key is ``"invalid: ..."`` and also warns
-    (:class:`InvalidCacheEntryWarning`, one line), since the caller re-renders it
-    and the new entry replaces it.
+    A missing entry is ``"absent"``; an entry that fails :func:`read_result_dir`, was
+    stored under another key, or (``camera`` given, a key of
+    :data:`CAMERA_INTEGRATORS`) records another camera integrator is
+    ``"invalid: ..."`` and also warns (:class:`InvalidCacheEntryWarning`, one line),
+    since the caller re-renders it and the new entry replaces it.
     """
     directory = root / key
     if not directory.exists():
@@ -454,6 +480,10 @@ def load_entry(root: Path, key: str) -> tuple[RenderResult | None, str]:
         result = read_result_dir(directory)
         if result.metadata.get("hash") != key:
             raise CacheEntryError(f"{directory}: stored under another key")
+        recorded = result.metadata.get("camera_integrator")
+        if camera is not None and recorded != CAMERA_INTEGRATORS[check_camera(camera)]:
+            raise CacheEntryError(f"{directory}: camera image by {recorded}, expected "
+                                  f"{CAMERA_INTEGRATORS[camera]}")
     except ExrError as error:
         reason = " ".join(str(error).split())  # one line, whatever the error held
         warnings.warn(f"invalid cached reference, re-rendering: {reason}",

@@ -4,8 +4,12 @@ Receiver maps: each round traces one batch per seed (K independent PCG32
 streams), then the per-seed estimates give the mean, the variance of the mean and
 the relative noise in the caustic region (:mod:`.noise`); rounds stop when the
 noise is at most ``settings.target_noise`` or every seed has used
-``settings.photons``. Camera image: K seeds of ``settings.spp`` particles per
-pixel (ptracer), mean and variance of the mean.
+``settings.photons``. Camera image: K seeds of ``settings.spp`` samples per
+pixel, mean and variance of the mean; by the camera tracer (:mod:`.camera_trace`:
+camera rays through the counted specular chains, shaded with direct light and the
+caustic irradiance of its own per-seed lookup maps) or, with ``camera="ptracer"``,
+by Mitsuba's particle tracer (:mod:`.camera`: specular objects and all seen through
+them render black).
 """
 
 from __future__ import annotations
@@ -20,13 +24,23 @@ import numpy as np
 from tqdm import tqdm
 
 from renderers.mitsuba import _mi
-from renderers.mitsuba.cache import cache_dir, cache_key, entry_lock, load_entry, write_result_dir
+from renderers.mitsuba.cache import (
+    CAMERA_INTEGRATORS,
+    cache_dir,
+    cache_key,
+    check_camera,
+    entry_lock,
+    load_entry,
+    write_result_dir,
+)
 from renderers.mitsuba.camera import (
     CAMERA_LIMITS,
     camera_cut_fraction,
     camera_max_depth,
     render_camera,
 )
+from renderers.mitsuba.camera_lookup import FOOTPRINT_PERCENTILE, LOOKUP_CAP, LookupPlan
+from renderers.mitsuba.camera_trace import camera_trace_limits, render_traced_camera
 from renderers.mitsuba.noise import caustic_region, relative_noise, seed_statistics
 from renderers.mitsuba.photons import (
     DEFAULT_BATCH,
@@ -198,11 +212,36 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
 def reference_metadata(scene: Scene, *, key: str, versions: dict, photons: int,
                        channel_passes: int, relative_noise: float, stopped_by: str,
                        history, cut_fraction: float, camera_cut: float,
-                       camera_variance: np.ndarray) -> dict:
+                       camera_variance: np.ndarray, lookup: LookupPlan | None = None) -> dict:
     """A reference's ``metadata`` (``result.json``): what was traced and how, with
-    ``hash`` = ``key``. ``history`` holds (photons, noise, seconds) per round;
-    ``camera_cut`` is :func:`.camera.camera_cut_fraction`'s share."""
+    ``hash`` = ``key``. ``history`` holds (photons, noise, seconds) per round.
+
+    The camera image is ptracer's unless ``lookup`` (the camera tracer's lookup maps)
+    is given. ``camera_cut``: ptracer, :func:`.camera.camera_cut_fraction`'s share of
+    the image's light; the camera tracer, the fraction of its samples the event cap
+    stopped (all-paths mode; 0 in chain mode).
+    """
     s = scene.settings
+    if lookup is None:
+        camera = {
+            "camera_integrator": CAMERA_INTEGRATORS["ptracer"],
+            "camera_limits": list(CAMERA_LIMITS),
+        }
+    else:
+        camera = {
+            "camera_integrator": CAMERA_INTEGRATORS["trace"],
+            "camera_limits": list(camera_trace_limits(lookup)),
+            # The caustic lookup maps (one per seed) and the footprint rule they follow.
+            "camera_lookup": {
+                "resolution": list(lookup.resolution),
+                "photons": lookup.photons,
+                "footprint_percentile": FOOTPRINT_PERCENTILE,
+                "footprints": list(lookup.footprints),
+                "texels": list(lookup.texels),
+                "cap": LOOKUP_CAP,
+                "coarser_than_footprint": lookup.capped,
+            },
+        }
     return {
         "hash": key,
         "variant": versions["variant"],
@@ -221,30 +260,24 @@ def reference_metadata(scene: Scene, *, key: str, versions: dict, photons: int,
         "cut_flux_fraction": cut_fraction,
         "max_specular_events": MAX_SPECULAR_EVENTS,
         "camera_max_depth": camera_max_depth(scene),
-        # Share of the camera image's light on paths past the cap, measured by one
-        # seed rendered again with twice the cap (camera.camera_cut_fraction).
+        # ptracer: share of the camera image's light on paths past the cap, measured by
+        # one seed rendered again with twice the cap (camera.camera_cut_fraction); the
+        # camera tracer: share of its samples the cap stopped.
         "camera_cut_fraction": camera_cut,
-        "camera_integrator": "ptracer",
-        "camera_limits": list(CAMERA_LIMITS),
+        **camera,
         "scene": scene.name,
         "camera_variance": camera_variance.astype(np.float32),
     }
 
 
-def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> RenderResult:
+def _ptracer_camera(scene: Scene, geometry, *, progress: bool, timings: dict):
+    """ptracer's K-seed camera image: (mean, variance of the mean, cut fraction)."""
     s = scene.settings
-    geometry = build_geometry(scene)
-    timings = {}
-    start = time.perf_counter()
-    # Only the caustic maps are kept: no photon is spent on the direct light.
-    est = estimate_receivers(scene, progress=progress, caustic_only=True)
-    timings["receiver_maps"] = time.perf_counter() - start
     start = time.perf_counter()
     frames = []
     seeds = range(s.seed, s.seed + s.seeds)
     iterator = seeds
     if progress:
-
         iterator = tqdm(seeds, desc=f"camera ({s.spp} spp per seed)", unit="seed", leave=False)
     for seed in iterator:
         frames.append(render_camera(scene, spp=s.spp, seed=seed, geometry=geometry))
@@ -255,24 +288,51 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict) -> Render
                                      geometry=geometry)
     if s.all_specular_paths:
         timings["camera_cut_probe"] = time.perf_counter() - start
+    return camera, camera_var, camera_cut
+
+
+def _render(scene: Scene, *, progress: bool, key: str, versions: dict,
+            camera: str) -> RenderResult:
+    geometry = build_geometry(scene)
+    timings = {}
+    start = time.perf_counter()
+    # Only the caustic maps are kept: no photon is spent on the direct light.
+    est = estimate_receivers(scene, progress=progress, caustic_only=True)
+    timings["receiver_maps"] = time.perf_counter() - start
+    lookup = None
+    if camera == "trace":
+        # Each seed traces its own lookup maps, scaled from the receiver maps' photons.
+        traced = render_traced_camera(scene, photons=est.photons, geometry=geometry,
+                                      progress=progress)
+        image, camera_var, camera_cut = traced.image, traced.variance, traced.cut_fraction
+        timings["camera_lookup_maps"] = traced.seconds["lookup_maps"]
+        timings["camera"] = traced.seconds["camera"]
+        lookup = traced.plan
+    else:
+        image, camera_var, camera_cut = _ptracer_camera(scene, geometry, progress=progress,
+                                                        timings=timings)
     _warn_cut(scene, camera_cut, "camera image")
     metadata = reference_metadata(
         scene, key=key, versions=versions, photons=est.photons,
         channel_passes=est.channel_passes, relative_noise=est.relative_noise,
         stopped_by=est.stopped_by, history=est.history, cut_fraction=est.cut_fraction,
-        camera_cut=camera_cut, camera_variance=camera_var)
+        camera_cut=camera_cut, camera_variance=camera_var, lookup=lookup)
     return RenderResult(
-        renderer="mitsuba", camera=camera.astype(np.float32), receivers=tuple(est.caustic),
+        renderer="mitsuba", camera=image.astype(np.float32), receivers=tuple(est.caustic),
         effects=effects_of(scene), timings=timings, timer=TIMER, metadata=metadata,
     )
 
 
 def render_reference(scene: Scene, *, cache: str | Path | None = None, use_cache: bool = True,
-                     progress: bool = True) -> RenderResult:
+                     progress: bool = True, camera: str = "trace") -> RenderResult:
     """The Mitsuba reference of ``scene``, from the cache or rendered and cached.
 
     Parameters
     ----------
+    camera
+        Camera integrator: ``"trace"``, the camera tracer (:mod:`.camera_trace`), or
+        ``"ptracer"``, Mitsuba's particle tracer (:mod:`.camera`). Part of the cache
+        key; an entry recording the other integrator is never returned.
     cache
         Cache root; default ``$CAUSTICS_CACHE_DIR`` or ~/.cache/caustics-harness/reference.
     use_cache
@@ -286,21 +346,28 @@ def render_reference(scene: Scene, *, cache: str | Path | None = None, use_cache
         ``camera``: mean radiance over K seeds; ``receivers``: mean irradiance maps
         with ``variance`` (of the mean); ``metadata``: photons, spp, seed(s),
         relative noise, event chains, versions, hash, ``cache`` ("hit" or why it
-        missed), ``camera_variance`` (ndarray).
+        missed), ``camera_variance`` (ndarray), ``camera_integrator``
+        (``"camera_trace"`` or ``"ptracer"``) and its ``camera_limits``.
+
+    Raises
+    ------
+    CameraIntegratorError
+        ``camera`` names no camera integrator.
     """
+    check_camera(camera)
     versions = _mi.versions()
-    key = cache_key(scene, versions)
+    key = cache_key(scene, versions, camera=camera)
     if not use_cache:
-        return _render(scene, progress=progress, key=key, versions=versions)
+        return _render(scene, progress=progress, key=key, versions=versions, camera=camera)
     root = cache_dir(cache)
     with entry_lock(root, key):
-        result, why = load_entry(root, key)
+        result, why = load_entry(root, key, camera=camera)
         if result is not None:
             result.metadata["cache"] = "hit"
             # The key is the physics, not the name: a renamed scene hits the entry.
             result.metadata["scene"] = scene.name
             return result
-        result = _render(scene, progress=progress, key=key, versions=versions)
+        result = _render(scene, progress=progress, key=key, versions=versions, camera=camera)
         write_result_dir(root / key, result)
         result.metadata["cache"] = f"miss ({why})"
         return result
