@@ -8,6 +8,27 @@ receiver (``off_receiver_flux_fraction``). With the flux on the receiver maps, o
 the method and of the reference, this says why a flux ratio is far from 1: light
 lost to total internal reflection, held back unconverged, splatted where no
 receiver is, or never emitted (a dark light).
+
+Budgets of both sides (:func:`method_budget`, :func:`reference_budget_table`), in
+watts per RGB channel, each as a :class:`Table` of :data:`SIDE_COLUMNS` whose rows
+have a ``role``:
+
+* ``emitted``: the flux each side sends toward the object. The method: the flux of
+  every grid vertex it traced (the light through the object grid, i.e. the
+  object's silhouette seen from the light). The reference: the flux its
+  caustic-only photons carry toward the objects' bounding spheres.
+* ``part``: where that flux went; the parts of one side add up to its emitted flux.
+  The method: per vertex status (lost, total internal reflection, unconverged,
+  diverged, no exit surface) from the per-vertex records, and the flux on its
+  receiver maps (Σ E · texel area) for the splatted vertices. The reference: the
+  items of :data:`renderers.mitsuba.photons.BUDGET_ITEMS`, from a separate
+  caustic-only trace (:func:`harness.compare.probe.reference_budget`).
+* ``detail``: a share of one part, not added (the splatted vertices' own flux; the
+  splats off every receiver; the reference trace's maps).
+* ``unaccounted``: emitted minus the parts. Not a part: a closing budget has it at
+  float round-off (both sides measured ~1e-5 of the emitted flux), so anything
+  larger is flux a side created or lost without saying where (the method: splats
+  whose kernel does not integrate to their flux on the maps).
 """
 
 from __future__ import annotations
@@ -16,10 +37,14 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from harness.compare.probe import BUDGET_PHOTONS, reference_budget
+from renderers.caustics_mapping.caustic_trace import STATUS
 from renderers.results import ReceiverMap
 from reports.records import Table
+from scenes import Scene
 
-__all__ = ["BUDGET_COLUMNS", "METHOD_ROW", "REFERENCE_ROW", "flux_budget"]
+__all__ = ["BUDGET_COLUMNS", "METHOD_ROW", "REFERENCE_ROW", "SIDE_COLUMNS", "budget_closure",
+           "flux_budget", "method_budget", "reference_budget_table", "side_budgets"]
 
 BUDGET_COLUMNS = ("item", "flux_w", "fraction")
 #: The budget rows of the caustic flux on the receivers (W), method and reference.
@@ -83,3 +108,159 @@ def flux_budget(metadata: Mapping, stability: Mapping | None,
         fraction = value / traced if traced else None
         rows.append((label, value, fraction))
     return Table(BUDGET_COLUMNS, tuple(rows))
+
+
+#: Columns of :func:`method_budget` and :func:`reference_budget_table`: the row's
+#: label and a short ``key`` (the same key on both sides for the same fate:
+#: ``emitted``, ``received`` for the flux on the receivers, ``tir``, ...), watts
+#: summed over RGB and per channel (None where a side does not know them),
+#: ``fraction`` of the side's emitted flux (RGB summed) and its standard error
+#: (reference only).
+SIDE_COLUMNS = ("item", "key", "role", "flux_w", "flux_r_w", "flux_g_w", "flux_b_w",
+                "fraction", "fraction_se")
+
+#: Labels of the reference budget's items (``BUDGET_ITEMS``), in the tracer's order.
+REFERENCE_LABELS = {
+    "missed": "missed the objects: met nothing, or a receiver straight from the light",
+    "tir": "total internal reflection: dropped by the chain rule",
+    "cap": "cut: still going after the last event (a chain longer than any counted one)",
+    "left": "left the scene off every receiver",
+    "uncounted": "reached a receiver along a chain that is not counted",
+    "fresnel": "a Fresnel reflection broke the chain",
+    "back_or_outside": "reached a receiver's back side or outside its map",
+    "absorbed_medium": "absorbed in the medium (Beer-Lambert)",
+    "absorbed_surface": "absorbed at a surface (conductor 1 - R, diffuse object)",
+    "shading": "shading-normal adjoint factor (negative: a gain)",
+    "deposited": "deposited on a counted chain: the caustic maps",
+}
+_CAP_ALL_PATHS = "cut by the safety cap of specular events (all-paths mode)"
+_UNACCOUNTED = "unaccounted: emitted minus the parts"
+
+
+def _row(item: str, key: str, role: str, rgb, fraction, *, se=None, total=None) -> tuple:
+    if rgb is None:
+        return (item, key, role, total, None, None, None, fraction, se)
+    rgb = [float(x) for x in np.asarray(rgb, float)]
+    return (item, key, role, float(sum(rgb)), *rgb, fraction, se)
+
+
+def method_budget(metadata: Mapping, stability: Mapping | None,
+                  method_maps: Sequence[ReceiverMap],
+                  hits: Mapping[str, np.ndarray] | None = None) -> Table | None:
+    """The method's budget (:data:`SIDE_COLUMNS`; roles in the module docstring).
+
+    With ``hits`` (the per-vertex records of the render: ``status``, ``flux`` (K, 3)
+    W) every part is in watts per channel; without, the parts come from
+    ``status_flux_fraction`` times the traced flux, summed over channels. None for a
+    method that records no vertex statuses (nothing to budget).
+    """
+    shares = metadata.get("status_flux_fraction") or {}
+    if hits is None and not shares:
+        return None
+    on_maps = sum((np.asarray(m.total_flux(), float) for m in method_maps), np.zeros(3))
+    if hits is not None:
+        status = np.asarray(hits["status"])
+        flux = np.asarray(hits["flux"], np.float64)
+        emitted = flux[status != STATUS["empty"]].sum(axis=0)
+        watts = {name: flux[status == code].sum(axis=0) for name, code in STATUS.items()}
+        total = float(emitted.sum())
+    else:
+        total = _traced_watts(metadata, shares)
+        if total is None:
+            return None
+        emitted = None
+        watts = {name: None for name in shares}
+
+    def fraction(value) -> float | None:
+        return float(np.sum(value)) / total if total > 0 else None
+
+    rows = [_row("emitted toward the object: traced through the object grid", "emitted",
+                 "emitted", emitted, 1.0 if total > 0 else None, total=total)]
+    parts = []
+    for status, label in _STATUS_ROWS:
+        if status == "hit" or (hits is None and status not in shares):
+            continue
+        value = watts.get(status)
+        share = fraction(value) if value is not None else float(shares.get(status, 0.0))
+        parts.append(value if value is not None else np.full(3, share * total / 3))
+        rows.append(_row(label, status, "part", value, share, total=share * total))
+    rows.append(_row("splatted: on the receiver maps (sum of E x texel area)", "received", "part",
+                     on_maps, fraction(on_maps)))
+    parts.append(on_maps)
+    if hits is not None:
+        rows.append(_row("  of the emitted: the splatted (hit) vertices' own flux", "hit",
+                         "detail", watts["hit"], fraction(watts["hit"])))
+    off = (stability or {}).get("off_receiver_flux_fraction")
+    if off is not None:
+        rows.append(_row("  of the splatted: off every receiver (exact ray)", "off_receiver",
+                         "detail", None, float(off), total=float(off) * total))
+    rest = (emitted - sum(parts)) if emitted is not None else None
+    rest_total = total - float(sum(np.sum(p) for p in parts))
+    rows.append(_row(_UNACCOUNTED, "unaccounted", "unaccounted", rest, fraction(rest_total),
+                     total=rest_total))
+    return Table(SIDE_COLUMNS, tuple(rows))
+
+
+def reference_budget_table(budget) -> Table:
+    """The reference's budget (:data:`SIDE_COLUMNS`) from a
+    :class:`harness.compare.probe.ReferenceBudget`: every item with its share's
+    standard error, and the trace's own maps as a check of ``deposited``."""
+    emitted = np.asarray(budget.emitted_w, float)
+    total = float(emitted.sum())
+    label = ("emitted toward the objects' bounding spheres" if budget.aimed
+             else "emitted by the area light (its photons are not aimed)")
+    rows = [_row(label, "emitted", "emitted", emitted, 1.0 if total > 0 else None)]
+    for item, value in budget.items_w.items():
+        label = REFERENCE_LABELS.get(item, item)
+        if item == "cap" and budget.all_paths:
+            label = _CAP_ALL_PATHS
+        key = "received" if item == "deposited" else item
+        rows.append(_row(label, key, "part", value, budget.share.get(item),
+                         se=budget.share_se.get(item)))
+    if budget.maps_flux_w is not None:
+        maps = np.asarray(budget.maps_flux_w, float)
+        rows.append(_row("  check of the deposited: flux on the trace's caustic maps", "maps",
+                         "detail", maps, float(maps.sum()) / total if total > 0 else None))
+    rest = np.asarray(budget.unaccounted_w, float)
+    rows.append(_row(_UNACCOUNTED, "unaccounted", "unaccounted", rest,
+                     float(rest.sum()) / total if total > 0 else None))
+    return Table(SIDE_COLUMNS, tuple(rows))
+
+
+def budget_closure(table: Table | None) -> float | None:
+    """|emitted − Σ parts| / emitted of a side's budget (RGB summed), None when the
+    table has no emitted flux."""
+    if table is None:
+        return None
+    records = table.records()
+    emitted = next((r["flux_w"] for r in records if r["role"] == "emitted"), None)
+    if not emitted:
+        return None
+    parts = sum(r["flux_w"] for r in records if r["role"] == "part")
+    return abs(emitted - parts) / emitted
+
+
+#: Reference budget traces of this process by reference hash: the presets of one
+#: scene share their reference, so they share its budget trace too.
+_TRACES: dict = {}
+_TRACES_KEPT = 16
+
+
+def side_budgets(scene: Scene, result, stability: Mapping | None, reference, *,
+                 hits: Mapping[str, np.ndarray] | None = None, geometry=None) -> dict:
+    """``SceneComparison`` fields ``method_budget``, ``reference_budget`` and
+    ``budget_trace`` for one method render (``result``, its per-vertex ``hits`` when
+    known) and its reference (a ``RenderResult``: its hash keys the budget trace,
+    traced once per process with :func:`harness.compare.probe.reference_budget`)."""
+    key = (reference.metadata.get("hash"), BUDGET_PHOTONS)
+    trace = _TRACES.get(key) if key[0] else None
+    reused = trace is not None
+    if trace is None:
+        trace = reference_budget(scene, geometry=geometry)
+        if key[0]:
+            if len(_TRACES) >= _TRACES_KEPT:
+                _TRACES.clear()
+            _TRACES[key] = trace
+    return {"method_budget": method_budget(result.metadata, stability, result.receivers, hits),
+            "reference_budget": reference_budget_table(trace),
+            "budget_trace": {**trace.provenance(), "reused_from_an_earlier_method": reused}}

@@ -49,6 +49,34 @@ the weight by exp(-sigma d) per channel.
 Irradiance: a photon of weight w (flux x N) landing in texel i of area
 A_uv (in (u, v) units) on a surface whose area per unit (u, v) is
 J = |dp/du x dp/dv| adds w / (N A_uv J) W/m^2. Planes have J = 1.
+
+Flux budget
+-----------
+With ``budget=True`` (caustic-only traces) the tracer also tallies, per photon and
+RGB channel, where its weight went; every photon ends in exactly one of the
+terminal items, and the weight it loses on the way is tallied as it goes, so the
+items (:data:`BUDGET_ITEMS`) add up to the emitted weight:
+
+* ``missed``: the first cast meets no object (nothing, or a receiver straight
+  from the light: direct light, not a caustic);
+* ``tir``: dropped by total internal reflection (chain mode without Fresnel);
+* ``cap``: still going after the last event allowed (chain mode: a chain longer
+  than any counted one; all-paths mode: the safety cap);
+* ``left``: a later cast meets nothing (left the scene off every receiver);
+* ``uncounted``: reached a receiver along a chain the effects do not count;
+* ``fresnel``: a Fresnel reflection at a dielectric broke the chain (chain mode),
+  and the photon ended anywhere but on a counted chain;
+* ``back_or_outside``: a counted chain reached a receiver's back side or a point
+  outside its map;
+* ``absorbed_medium``: Beer-Lambert, w (1 - exp(-sigma d)) per segment;
+* ``absorbed_surface``: (1 - R) w at conductors, and all of w at a diffuse object;
+* ``shading``: w (1 - factor) of the adjoint shading-normal factor (signed: a
+  factor above one is a gain, a negative loss);
+* ``deposited``: deposited on a counted chain (what the caustic maps hold).
+
+The tallies are per-lane registers summed once per launch; the maps' kernel
+never reads them, and a trace without the budget builds exactly the kernel it
+built before they existed.
 """
 
 from __future__ import annotations
@@ -71,6 +99,7 @@ from scenes.geometry import SceneGeometry, build_geometry
 from scenes.model import Scene
 
 __all__ = [
+    "BUDGET_ITEMS",
     "MAX_SPECULAR_EVENTS",
     "PhotonSums",
     "PhotonTracer",
@@ -89,6 +118,11 @@ _TAIL_FROM = 8
 DEFAULT_BATCH = 1 << 20
 
 _T, _R = 1, 2  # event codes: code = code * 3 + event
+
+#: Where a photon's weight goes (see the module docstring, "Flux budget"), in the
+#: order the budget lists them.
+BUDGET_ITEMS = ("missed", "tir", "cap", "left", "uncounted", "fresnel", "back_or_outside",
+                "absorbed_medium", "absorbed_surface", "shading", "deposited")
 
 
 def _chain_code(chain: str) -> int:
@@ -135,6 +169,18 @@ class PhotonSums:
         Ray casts the photons' paths made (past the direct-light pass), summed
         over lanes and events: the tracer's work, to set its cost beside the
         events a path limit allows.
+    budget : ndarray (launches, len(BUDGET_ITEMS), 3) float64, or None
+        With ``PhotonTracer(..., budget=True)``: per launch, the weight sum (W x
+        photons, RGB) of each item of :data:`BUDGET_ITEMS`; ``emitted`` is then
+        summed in chain mode too.
+    launch_emitted : ndarray (launches, 3) float64, or None
+        With the budget: the emitted weight sum of each launch.
+    launch_pass : tuple of int, or None
+        With the budget: the channel pass (0, or 0..2 with dispersion) of each launch.
+    screened : int
+        With the budget: photons left out of it because their emission weight was
+        not finite or above :data:`_SCREEN_FACTOR` times the light's intensity
+        (:meth:`_Tally.screen`).
     """
 
     total: list
@@ -143,6 +189,10 @@ class PhotonSums:
     emitted: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     cut: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     casts: int = 0
+    budget: np.ndarray | None = None
+    launch_emitted: np.ndarray | None = None
+    launch_pass: tuple[int, ...] | None = None
+    screened: int = 0
 
 
 def _lane_rng(n: int, key: int):
@@ -199,17 +249,24 @@ class PhotonTracer:
     shading_correction : bool
         Apply the adjoint shading-normal correction (see the module docstring);
         off only to measure its effect.
+    budget : bool
+        Tally where each photon's weight went (``PhotonSums.budget``; the module
+        docstring's "Flux budget"). Needs ``caustic_only``. The maps are the same
+        with or without it.
     """
 
     def __init__(self, scene: Scene, *, geometry: SceneGeometry | None = None,
                  resolution: tuple[int, int] | None = None,
                  extents: list | None = None, caustic_only: bool = False,
-                 shading_correction: bool = True) -> None:
+                 shading_correction: bool = True, budget: bool = False) -> None:
         _, _, variant = _mi.load()
         if not variant.startswith(("llvm", "cuda")):
             raise _mi.MitsubaError(
                 f"the photon tracer needs a vectorised Mitsuba variant, got {variant}"
             )
+        if budget and not caustic_only:
+            raise ValueError("the flux budget is tallied on caustic-only traces")
+        self.budget = bool(budget)
         self.scene = scene
         self.geometry = geometry or build_geometry(scene)
         self.resolution = tuple(resolution or scene.settings.receiver_map)
@@ -270,26 +327,37 @@ class PhotonTracer:
         batch = max(1, min(batch, photons))
         launches = -(-photons // batch)
         emitted, cut, casts = np.zeros(3), np.zeros(3), 0
-        for c in self.channels:
+        tallies, launch_emitted, launch_pass, screened = [], [], [], 0
+        for p, c in enumerate(self.channels):
             for launch in range(launches):
                 key = ((seed * 1_000_003 + stream) * 7 + (0 if c is None else c + 1)) \
                     * 1_000_003 + launch
-                flux = self._launch(batch, key, c, total, caustic)
+                tally = _Tally() if self.budget else None
+                flux = self._launch(batch, key, c, total, caustic, tally=tally)
                 dr.eval(total, caustic)
                 emitted += flux[0]
                 cut += flux[1]
                 casts += flux[2]
+                if tally is not None:
+                    tallies.append(tally.sums(batch))
+                    screened += tally.screened
+                    launch_emitted.append(flux[0])
+                    launch_pass.append(p)
         shape = (h, w, 3)
         return PhotonSums(
             total=None if total is None
             else [np.asarray(t, dtype=np.float64).reshape(shape) for t in total],
             caustic=[np.asarray(t, dtype=np.float64).reshape(shape) for t in caustic],
             photons=launches * batch, emitted=emitted, cut=cut, casts=casts,
+            budget=np.stack(tallies) if self.budget else None,
+            launch_emitted=np.stack(launch_emitted) if self.budget else None,
+            launch_pass=tuple(launch_pass) if self.budget else None, screened=screened,
         )
 
-    def _launch(self, n: int, key: int, channel, total, caustic) -> tuple[np.ndarray, ...]:
+    def _launch(self, n: int, key: int, channel, total, caustic, *,
+                tally: _Tally | None = None) -> tuple[np.ndarray, ...]:
         """Trace one batch; returns the (emitted, cut) weight sums (RGB) and the ray
-        casts (see PhotonSums)."""
+        casts (see PhotonSums). ``tally`` collects the flux budget (``budget``)."""
         mi, _, _ = _mi.load()
         rng = _lane_rng(n, key)
         square = stratified_square(rng, n)
@@ -301,15 +369,19 @@ class PhotonTracer:
             si = self.receivers_only.scene.ray_intersect(ray)
             self._deposit(si, ray.d, weight, si.is_valid(),
                           receiver_ids=self.receivers_only.receiver_ids, total=total, caustic=None)
-        # Only all-paths mode has a path limit to account for; chain mode cuts nothing.
-        emitted = _rgb_sum(weight, n) if self.all_paths else np.zeros(3)
+        if tally is not None:
+            weight = tally.screen(weight, self.scene.light)
+        # Only all-paths mode has a path limit to account for; chain mode cuts nothing
+        # (the budget needs the emitted weight in every mode).
+        emitted = _rgb_sum(weight, n) if self.all_paths or tally is not None else np.zeros(3)
         cut, casts = self._trace_chain(exported, ray, weight, rng=rng, channel=channel,
                                        total=total,
-                                caustic=caustic, lanes=n)
+                                caustic=caustic, lanes=n, tally=tally)
         return emitted, cut, casts
 
     def _trace_chain(self, exported: ExportedScene, ray, weight, *, rng, channel,
-                     total, caustic, lanes: int) -> tuple[np.ndarray, int]:
+                     total, caustic, lanes: int,
+                     tally: _Tally | None = None) -> tuple[np.ndarray, int]:
         """Follow the photons through their specular events, depositing the counted
         ones; returns the weight sum (RGB) of paths the safety cap stopped and the
         number of ray casts traced (lanes x events, the tracer's work).
@@ -329,9 +401,12 @@ class PhotonTracer:
         tail = self.all_paths and self.max_events > _TAIL_FROM
         head = _TAIL_FROM if tail else self.max_events
         cast = mi.UInt32(0)  # ray casts per lane
+        broken = mi.Bool(False)  # a Fresnel reflection broke the chain (budget only)
         for depth in range(head + 1):
             cast += dr.select(active, 1, 0)
+            arriving = weight
             si, hit, weight = self._arrive(exported, ray, weight, sigma, active)
+            deposited, ok = mi.Bool(False), mi.Bool(False)
             if depth in self.deposit_depths:
                 if self.all_paths:
                     ok = mi.Bool(depth > 0)
@@ -343,13 +418,24 @@ class PhotonTracer:
                     ok &= ~mixed
                 if self.direct_full:
                     ok |= code == 0
-                self._deposit(si, ray.d, weight, hit & ok, receiver_ids=exported.receiver_ids,
-                              total=total, caustic=caustic if depth > 0 else None)
-            if depth == self.max_events and not self.all_paths:
-                dr.eval(cast, total, caustic)
+                deposited = self._deposit(si, ray.d, weight, hit & ok,
+                                          receiver_ids=exported.receiver_ids, total=total,
+                                          caustic=caustic if depth > 0 else None)
+            last = depth == self.max_events and not self.all_paths
+            if tally is not None:
+                tally.arrival(si, receiver_ids=exported.receiver_ids, active=active, hit=hit,
+                              ok=ok, deposited=deposited, broken=broken, first=depth == 0,
+                              arriving=arriving, weight=weight, last=last)
+            if last:
+                dr.eval(cast, total, caustic, *([] if tally is None else tally.registers()))
                 return np.zeros(3), _total(cast, lanes)  # every chain ends here
             event = self._event(exported, si, ray=ray, weight=weight, sigma=sigma, rng=rng,
                                 hit=hit, channel=channel)
+            if tally is not None:
+                tally.event(event, weight=weight, alive=hit & ~tally.on_receiver,
+                            broken=broken)
+                if not self.all_paths:
+                    broken |= event.dielectric_reflection
             sid = dr.reinterpret_array(mi.UInt32, si.shape)
             first = dr.select(depth == 0, sid, first)
             mixed |= sid != first
@@ -359,13 +445,20 @@ class PhotonTracer:
                 # Paths that would go on: the cap cuts them, and their flux is what
                 # the cap loses.
                 alive = dr.select(active, weight, 0.0)
-                dr.eval(alive, cast, total, caustic)  # one kernel for the whole path
+                registers = []
+                if tally is not None:
+                    tally.add("cap", active, weight)
+                    registers = tally.registers()
+                dr.eval(alive, cast, total, caustic, *registers)  # one kernel for the path
                 return _rgb_sum(alive, lanes), _total(cast, lanes)
         # Wavefront compaction: keep only the paths still alive. The state is
         # evaluated in one kernel first: each gather from an unevaluated array would
         # otherwise re-run every event so far in a kernel of its own.
-        dr.eval(ray, weight, rng, sigma, active, cast, total, caustic)
+        dr.eval(ray, weight, rng, sigma, active, cast, total, caustic,
+                *([] if tally is None else tally.registers()))
         casts = _total(cast, lanes)
+        if tally is not None:
+            tally.close(lanes)  # the head's registers, summed before the lanes change
         idx = dr.compress(active)
         lanes = dr.width(idx)
         if lanes == 0:
@@ -373,37 +466,57 @@ class PhotonTracer:
         ray, weight, rng, sigma = (dr.gather(type(x), x, idx) for x in (ray, weight, rng, sigma))
         ray, weight, sigma, active, casts_tail = self._tail(
             exported, ray, weight, sigma, rng, channel=channel, total=total, caustic=caustic,
-            lanes=lanes)
+            lanes=lanes, tally=tally)
         return _rgb_sum(dr.select(active, weight, 0.0), lanes), casts + casts_tail
 
     def _tail(self, exported: ExportedScene, ray, weight, sigma, rng, *, channel, total,
-              caustic, lanes: int):
+              caustic, lanes: int, tally: _Tally | None = None):
         """Events ``_TAIL_FROM + 1`` .. cap of the surviving paths in one symbolic loop
         (all-paths mode: every receiver hit counts); returns the state after the
-        cap's event and the ray casts made."""
+        cap's event and the ray casts made. With ``tally``, the budget's registers
+        ride in the loop's state (one per item, for the compacted lanes)."""
         mi, dr, _ = _mi.load()
+        items = len(BUDGET_ITEMS) if tally is not None else 0
 
         def step(*state):
-            ray, weight, sigma, rng, active, depth, casts = state
+            ray, weight, sigma, rng, active, depth, casts = state[:7]
+            arriving = weight
             si, hit, weight = self._arrive(exported, ray, weight, sigma, active)
-            self._deposit(si, ray.d, weight, hit, receiver_ids=exported.receiver_ids,
-                          total=total, caustic=caustic)
+            deposited = self._deposit(si, ray.d, weight, hit,
+                                      receiver_ids=exported.receiver_ids, total=total,
+                                      caustic=caustic)
             event = self._event(exported, si, ray=ray, weight=weight, sigma=sigma, rng=rng,
                                 hit=hit, channel=channel)
+            registers = ()
+            if items:
+                step_tally = _Tally(dict(zip(BUDGET_ITEMS, state[7:], strict=True)))
+                step_tally.arrival(si, receiver_ids=exported.receiver_ids, active=active,
+                                   hit=hit, ok=mi.Bool(True), deposited=deposited,
+                                   broken=mi.Bool(False), first=False, arriving=arriving,
+                                   weight=weight, last=False)
+                step_tally.event(event, weight=weight, alive=hit & ~step_tally.on_receiver,
+                                 broken=mi.Bool(False))
+                registers = tuple(step_tally.registers())
             # Lanes that stopped keep their state (the loop masks them out).
             return (event.ray, event.weight, event.sigma, rng, event.going_on, depth + 1,
-                    casts + 1)
+                    casts + 1, *registers)
 
+        zeros = tuple(dr.zeros(mi.Color3f, lanes) for _ in range(items))
         state = (ray, weight, sigma, rng, dr.full(mi.Bool, True, lanes),
-                 dr.full(mi.UInt32, _TAIL_FROM + 1, lanes), dr.zeros(mi.UInt32, lanes))
-        ray, weight, sigma, rng, active, _, casts = dr.while_loop(
+                 dr.full(mi.UInt32, _TAIL_FROM + 1, lanes), dr.zeros(mi.UInt32, lanes), *zeros)
+        ray, weight, sigma, rng, active, _, casts, *registers = dr.while_loop(
             state=state,
             cond=lambda *state: state[4] & (state[5] <= self.max_events),
             body=step,
-            labels=("ray", "weight", "sigma", "rng", "active", "depth", "casts"),
+            labels=("ray", "weight", "sigma", "rng", "active", "depth", "casts",
+                    *BUDGET_ITEMS[:items]),
             label="photon_tail",
         )
-        dr.eval(ray, weight, active, casts, total, caustic)
+        dr.eval(ray, weight, active, casts, total, caustic, *registers)
+        if tally is not None:
+            tail_tally = _Tally(dict(zip(BUDGET_ITEMS, registers, strict=True)))
+            tail_tally.add("cap", active, weight)
+            tally.merge(tail_tally, lanes)
         return ray, weight, sigma, active, _total(casts, lanes)
 
     def _arrive(self, exported: ExportedScene, ray, weight, sigma, active):
@@ -422,9 +535,11 @@ class PhotonTracer:
                               channel=channel, all_paths=self.all_paths,
                               shading_correction=self.shading_correction)
 
-    def _deposit(self, si, d, weight, mask, *, receiver_ids, total, caustic) -> None:
-        """scatter_reduce the photons of ``mask`` into the texel their (u, v) falls in."""
+    def _deposit(self, si, d, weight, mask, *, receiver_ids, total, caustic):
+        """scatter_reduce the photons of ``mask`` into the texel their (u, v) falls in;
+        returns the lanes deposited (read only by the flux budget)."""
         mi, dr, _ = _mi.load()
+        deposited = mi.Bool(False)
         w, h = self.resolution
         sid = dr.reinterpret_array(mi.UInt32, si.shape)
         front = dr.dot(d, si.sh_frame.n) < 0  # Lambertian receivers are one-sided
@@ -444,6 +559,110 @@ class PhotonTracer:
                     dr.scatter_reduce(dr.ReduceOp.Add, total[r], value[ch], index + ch, m)
                 if caustic is not None:
                     dr.scatter_reduce(dr.ReduceOp.Add, caustic[r], value[ch], index + ch, m)
+            deposited |= m
+        return deposited
+
+
+#: A photon's weight is I / pdf with pdf = sum_j q_j / Omega_j >= q_j / (4 pi) (or
+#: E0 / pdf with pdf >= q_j / (pi r_j^2)): a weight 1e20 times the light's intensity
+#: needs q_j below 1e-19, so such a weight is not a sampled pdf but one rounded to
+#: zero (``emission.sample_photons`` re-tests the cone it sampled in, and a direction
+#: on the cone's edge can test outside: weight I / 1e-30, or E0 / 0 = inf).
+_SCREEN_FACTOR = 1e20
+
+
+class _Tally:
+    """Per-lane registers of the flux budget (one Color3f per item of
+    :data:`BUDGET_ITEMS`) and, once a launch's lanes are summed, their RGB sums.
+
+    ``arrival`` classifies where a cast ended, ``event`` what the specular event
+    took; each photon ends in one terminal item, and the weight it loses on the way
+    goes to ``absorbed_medium``, ``absorbed_surface`` and ``shading`` as it is lost.
+    """
+
+    def __init__(self, registers: dict | None = None):
+        mi, _, _ = _mi.load()
+        self.acc = registers or {item: mi.Color3f(0.0) for item in BUDGET_ITEMS}
+        self.summed = np.zeros((len(BUDGET_ITEMS), 3))
+        self.on_receiver = mi.Bool(False)
+        self.screened = 0
+
+    def screen(self, weight, light):
+        """Leave out of the budget the photons whose emission pdf was rounded to zero
+        (see :data:`_SCREEN_FACTOR`): their weight is not finite or absurd, and would
+        swamp the emitted sum. Such photons leave along the edge of a target's cone
+        or disk, which bounds the object with a margin, so they miss it and never
+        reach a caustic map; they are counted in ``screened``."""
+        _, dr, _ = _mi.load()
+        power = np.asarray(getattr(light, "intensity", getattr(light, "irradiance", 1.0)),
+                           float)
+        bound = _SCREEN_FACTOR * max(float(np.max(power)), 1e-30)
+        largest = dr.maximum(dr.maximum(weight[0], weight[1]), weight[2])
+        bad = ~dr.isfinite(largest) | (largest > bound)
+        self.screened = int(dr.count(bad)[0]) if dr.width(bad) > 1 else int(bool(bad[0]))
+        return dr.select(bad, 0.0, weight)
+
+    def add(self, item: str, mask, value) -> None:
+        """Add ``value`` (Color3f) of the lanes in ``mask`` to ``item``."""
+        _, dr, _ = _mi.load()
+        self.acc[item] = self.acc[item] + dr.select(mask, value, 0.0)
+
+    def arrival(self, si, *, receiver_ids, active, hit, ok, deposited, broken, first: bool,
+                arriving, weight, last: bool) -> None:
+        """Tally a cast of the ``active`` lanes: Beer-Lambert on the segment, and the
+        photons whose path ends here (nothing met, a receiver, or the chain's last
+        event reached on an object)."""
+        mi, dr, _ = _mi.load()
+        sid = dr.reinterpret_array(mi.UInt32, si.shape)
+        on_receiver = mi.Bool(False)
+        for rid in receiver_ids:
+            on_receiver |= sid == rid
+        self.on_receiver = on_receiver
+        self.add("absorbed_medium", active, arriving - weight)
+        self.add("missed" if first else "left", active & ~hit, weight)
+        self.add("deposited", deposited, weight)
+        landed = hit & on_receiver & ~deposited
+        if first:
+            self.add("missed", landed, weight)
+        else:
+            self.add("back_or_outside", landed & ok, weight)
+            self.add("fresnel", landed & ~ok & broken, weight)
+            self.add("uncounted", landed & ~ok & ~broken, weight)
+        if last:  # an object after the last counted event: the chain would go on
+            on_object = hit & ~on_receiver
+            self.add("fresnel", on_object & broken, weight)
+            self.add("cap", on_object & ~broken, weight)
+
+    def event(self, event, *, weight, alive, broken) -> None:
+        """Tally a specular event at the lanes ``alive`` (hit an object): dropped by
+        total internal reflection, absorbed by a diffuse object, or the weight a
+        conductor and the shading-normal factor took from a photon going on."""
+        self.add("tir", event.dropped, weight)
+        absorbed = alive & ~event.going_on & ~event.dropped
+        self.add("fresnel", absorbed & broken, weight)
+        self.add("absorbed_surface", absorbed & ~broken, weight)
+        self.add("absorbed_surface", event.going_on, event.surface_loss)
+        self.add("shading", event.going_on, event.shading_loss)
+
+    def registers(self) -> list:
+        """The per-lane registers, in :data:`BUDGET_ITEMS` order (to evaluate)."""
+        return [self.acc[item] for item in BUDGET_ITEMS]
+
+    def close(self, lanes: int) -> None:
+        """Sum the registers over ``lanes`` lanes into ``summed`` and start afresh."""
+        mi, _, _ = _mi.load()
+        self.summed += np.stack([_rgb_sum(self.acc[item], lanes) for item in BUDGET_ITEMS])
+        self.acc = {item: mi.Color3f(0.0) for item in BUDGET_ITEMS}
+
+    def merge(self, other: _Tally, lanes: int) -> None:
+        """Add another tally's registers over ``lanes`` lanes (the compacted tail)."""
+        other.close(lanes)
+        self.summed += other.summed
+
+    def sums(self, lanes: int) -> np.ndarray:
+        """(items, 3) weight sums of the launch (its ``lanes`` lanes)."""
+        self.close(lanes)
+        return self.summed
 
 
 def _total(count, lanes: int) -> int:

@@ -37,6 +37,21 @@ class Event:
         The event was a reflection (else a transmission).
     going_on : mi.Bool
         The photon scatters on (it hit a specular object and was not dropped).
+    dropped : mi.Bool
+        Total internal reflection dropped the photon (chain mode without Fresnel).
+    surface_loss : mi.Color3f
+        Weight the surface absorbed from a photon that goes on: (1 - R) w at a
+        conductor of reflectance R, else 0.
+    shading_loss : mi.Color3f
+        Weight the adjoint shading-normal factor took from a photon that goes on,
+        w (1 - factor): negative where the factor exceeds one (a gain).
+    dielectric_reflection : mi.Bool
+        The photon goes on after reflecting at a dielectric (Fresnel, or total
+        internal reflection in all-paths mode).
+
+    The last four are tallies for the tracer's flux budget (``PhotonTracer(...,
+    budget=True)``); the tracer's maps never read them, so a trace without the
+    budget compiles the same kernel as before they existed.
     """
 
     ray: object
@@ -44,6 +59,10 @@ class Event:
     sigma: object
     reflected: object
     going_on: object
+    dropped: object = None
+    surface_loss: object = None
+    shading_loss: object = None
+    dielectric_reflection: object = None
 
 
 def specular_event(si, ray, weight, sigma, rng, *, hit, object_ids, objects, channel,
@@ -109,7 +128,9 @@ def specular_event(si, ray, weight, sigma, rng, *, hit, object_ids, objects, cha
     reflect = dr.select(fres, u < f, tir & all_paths)
     drop = dielectric & ~fres & tir & (not all_paths)
     reflect = dr.select(dielectric, reflect, True)
+    arrived = weight
     weight = dr.select(going_on & (kind == CONDUCTOR), weight * refl, weight)
+    reflected_weight = weight
     new_d = dr.select(reflect, r_dir, t_dir)
     if shading_correction:
         ng = si.n
@@ -122,5 +143,10 @@ def specular_event(si, ray, weight, sigma, rng, *, hit, object_ids, objects, cha
     # Medium after the event: reflection keeps it; transmission enters the object's
     # medium or leaves to vacuum (objects do not nest).
     sigma = dr.select(reflect, sigma, dr.select(entering, obj_sigma, mi.Color3f(0.0)))
+    on = going_on & ~drop
+    zero = mi.Color3f(0.0)
     return Event(ray=si.spawn_ray(new_d), weight=weight, sigma=sigma, reflected=reflect,
-                 going_on=going_on & ~drop)
+                 going_on=on, dropped=going_on & drop,
+                 surface_loss=dr.select(on, arrived - reflected_weight, zero),
+                 shading_loss=dr.select(on, reflected_weight - weight, zero),
+                 dielectric_reflection=on & dielectric & reflect)

@@ -1,0 +1,176 @@
+"""Honest headlines: what a reader must know before any number on a scene's page.
+
+:func:`with_headlines` reads a finished :class:`~reports.records.SceneComparison`
+and adds banners (``headlines``), and withholds the equal-error speedup where the
+error it is computed for means nothing (``speedup_withheld``). Rules:
+
+* **reference noise**: the reference stopped at its photon budget above its noise
+  target (``relative_noise > target_noise``, ``stopped_by == "budget"``). Every
+  metric and noise floor below carries that larger noise.
+* **noise floor**: the method's relMSE (receiver 0, caustic region) is at most its
+  noise floor, the relMSE of an independent reference seed against the reference.
+  A method without bias scores about half the floor (its error against the
+  reference is the reference's variance v, the floor's 2 v), so an error at or
+  below the floor is a bias no larger than the reference's own noise: the
+  comparison cannot tell the method from the reference.
+* **speedup**: shown only when the error it is computed at is meaningful. It is
+  withheld, with the reason, when
+
+  - relMSE >= :data:`RELMSE_USABLE` (1): relMSE = mean (x − r)² / (r² + ε), and a
+    black image (x = 0) scores mean r² / (r² + ε) < 1; an error of 1 or more is
+    worse than rendering no caustic at all, not an estimate of it, and matching it
+    takes the reference almost no photons;
+  - the error is within the noise floor (above): the reference's curve cannot be
+    read at errors its own noise hides;
+  - the reference's curve does not reach the error: its cheapest budget is already
+    more accurate (``kind == "bound"``: only an upper bound), or the error is below
+    the curve's best by more than :data:`EXTRAPOLATION_LIMIT` (4). The curve's
+    budgets go up to a quarter of the reference's photons, so 4x the last budget is
+    the reference's own photon count; beyond it the 1/t extrapolation would claim
+    errors smaller than the reference itself resolves.
+
+* **claims**: each paper claim's verdict (``harness.studies.claims``), a warning when
+  it is undecided at this noise.
+* **budget**: a side's flux budget that does not add up to its emitted flux within
+  :data:`BUDGET_CLOSURE` (1e-3).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from harness.compare.budget import budget_closure
+from reports.records import Headline, SceneComparison, SpeedupWithheld
+
+__all__ = ["BUDGET_CLOSURE", "EXTRAPOLATION_LIMIT", "RELMSE_USABLE", "headlines_for",
+           "speedup_reason", "with_headlines"]
+
+#: relMSE at or above which the method's image is no estimate (module docstring).
+RELMSE_USABLE = 1.0
+#: How far below the reference curve's smallest error an extrapolated speedup may go.
+EXTRAPOLATION_LIMIT = 4.0
+#: Largest |emitted − Σ parts| / emitted of a budget that closes: both sides measure
+#: ~1e-5 (float32 sums); 1e-3 leaves room for round-off, not for a lost item.
+BUDGET_CLOSURE = 1e-3
+
+
+def _relmse(comparison: SceneComparison):
+    try:
+        return comparison.metric("receiver0", "caustic", "relmse")
+    except KeyError:
+        return None
+
+
+def _curve_errors(comparison: SceneComparison) -> list[float]:
+    if comparison.cost is None:
+        return []
+    return [float(r["relmse"]) for r in comparison.cost.records()
+            if r["series"] == "reference" and r["relmse"] is not None
+            and math.isfinite(float(r["relmse"])) and float(r["relmse"]) > 0]
+
+
+def speedup_reason(error: float, noise_floor: float | None, kind: str,
+                   curve_errors: list[float]) -> tuple[str, str] | None:
+    """Why the equal-error speedup at relMSE ``error`` is withheld, as (a few words,
+    a sentence with the numbers), or None to show it (module docstring: the bound,
+    the noise floor, the curve's reach)."""
+    if error is None or not math.isfinite(error):
+        return "relMSE not a number", "the method's relMSE is not a number"
+    if error >= RELMSE_USABLE:
+        return (f"relMSE {error:.3g} >= {RELMSE_USABLE:g}",
+                f"the method's relMSE is {error:.3g}, at or above {RELMSE_USABLE:g}: worse "
+                "than a black image (whose relMSE is below 1), so not an estimate whose "
+                "cost could be compared")
+    if noise_floor is not None and math.isfinite(noise_floor) and error <= noise_floor:
+        return ("error within the noise floor",
+                f"the method's relMSE {error:.3g} is within the reference's noise floor "
+                f"{noise_floor:.3g}: the reference's curve cannot be read at that error")
+    if kind == "bound":
+        return ("reference curve does not reach the error",
+                f"the reference's cheapest budget is already more accurate than the method "
+                f"(relMSE {error:.3g} against the curve's largest "
+                f"{max(curve_errors, default=math.nan):.3g}): the curve does not reach "
+                "this error, so the speedup would only be an upper bound")
+    best = min(curve_errors, default=math.nan)
+    if kind == "extrapolated" and math.isfinite(best) and error < best / EXTRAPOLATION_LIMIT:
+        return (f"extrapolated past {EXTRAPOLATION_LIMIT:g}x the curve",
+                f"the method's relMSE {error:.3g} is more than {EXTRAPOLATION_LIMIT:g}x below "
+                f"the reference curve's best {best:.3g}: past the reference's own photon "
+                "count, where the 1/t extrapolation is not measured")
+    return None
+
+
+def _noise_headlines(comparison: SceneComparison) -> list[Headline]:
+    out = []
+    ref = comparison.provenance.get("reference") or {}
+    noise, target = ref.get("relative_noise"), ref.get("target_noise")
+    if (ref.get("stopped_by") == "budget" and noise is not None and target is not None
+            and math.isfinite(noise) and noise > target):
+        out.append(Headline("reference_noise", "warning", (
+            f"The reference missed its noise target: it stopped at its photon budget "
+            f"({ref.get('photons')} photons per seed, {ref.get('seeds')} seeds) with a "
+            f"relative noise of {noise:.3g} in the caustic region, against a target of "
+            f"{target:.3g}. Every metric and noise floor on this page carries that noise.")))
+    relmse = _relmse(comparison)
+    if (relmse is not None and relmse.noise_floor is not None
+            and math.isfinite(relmse.value) and math.isfinite(relmse.noise_floor)
+            and relmse.value <= relmse.noise_floor):
+        out.append(Headline("noise_floor", "warning", (
+            f"The method's error is within the reference's noise: relMSE {relmse.value:.3g} "
+            f"(receiver 0, caustic region) against a noise floor of {relmse.noise_floor:.3g} "
+            "(an independent reference seed against the reference). The comparison cannot "
+            "tell the method from the reference; a less noisy reference could.")))
+    return out
+
+
+def _speedup(comparison: SceneComparison) -> tuple[Headline | None, SpeedupWithheld | None]:
+    warm, cold = comparison.speedup, comparison.speedup_cold
+    if warm is None and cold is None:
+        return None, None
+    relmse = _relmse(comparison)
+    error = (comparison.speedup_point[1] if comparison.speedup_point is not None
+             else relmse.value if relmse is not None else math.nan)
+    floor = relmse.noise_floor if relmse is not None else None
+    kind = (warm or cold).kind
+    reason = speedup_reason(error, floor, kind, _curve_errors(comparison))
+    if reason is None:
+        text = f"Equal-error speedup, warm against warm: {warm.speedup:.3g}x ({warm.kind})" \
+            if warm is not None else ""
+        if cold is not None:
+            text += f"{'; cold' if text else 'Cold'} against cold: {cold.speedup:.3g}x"
+        return Headline("speedup", "note", text + f", at relMSE {error:.3g}."), None
+    short, reason = reason
+    return (Headline("speedup", "warning", f"Equal-error speedup withheld: {reason}."),
+            SpeedupWithheld(reason=reason, warm=warm, cold=cold, short=short))
+
+
+def headlines_for(comparison: SceneComparison) -> tuple[tuple[Headline, ...],
+                                                         SpeedupWithheld | None]:
+    """The banners of ``comparison`` and the speedup it withholds (module docstring)."""
+    out = _noise_headlines(comparison)
+    speedup, withheld = _speedup(comparison)
+    if speedup is not None:
+        out.append(speedup)
+    for v in comparison.claim_verdicts:
+        level = "warning" if v.verdict == "undecided at this noise" else "note"
+        out.append(Headline("claim", level, f"Paper claim, {v.claim}: {v.text}."))
+    for side, table in (("method", comparison.method_budget),
+                        ("reference", comparison.reference_budget)):
+        closure = budget_closure(table)
+        if closure is not None and closure > BUDGET_CLOSURE:
+            out.append(Headline("budget", "warning", (
+                f"The {side}'s flux budget does not close: its parts miss the emitted flux "
+                f"by {closure:.2%} (more than {BUDGET_CLOSURE:g}): flux went somewhere the "
+                "budget does not name.")))
+    return tuple(out), withheld
+
+
+def with_headlines(comparison: SceneComparison) -> SceneComparison:
+    """``comparison`` with its headlines, and its speedups withheld (set to None,
+    kept in ``speedup_withheld``) where they are not meaningful."""
+    headlines, withheld = headlines_for(comparison)
+    changes = {"headlines": headlines, "speedup_withheld": withheld}
+    if withheld is not None:
+        changes |= {"speedup": None, "speedup_cold": None}
+    return dataclasses.replace(comparison, **changes)
