@@ -5,6 +5,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
+from harness.figures.camera import camera_row, object_difference_row
 from harness.figures.common import FigureContext, receiver_scores, shared_white, show
 from harness.studies.runner import frame_seconds
 from reports.records import Table
@@ -20,7 +21,7 @@ def figure_10(ctx: FigureContext):
     strong = ctx.realtime(ctx.scene("bunny", preset="strong"))
     white = shared_white(ref.camera)
     rwhite = shared_white(ref.receivers[0].irradiance)
-    fig, axes = plt.subplots(2, 3, figsize=(9.6, 6.4))
+    fig, axes = plt.subplots(3, 3, figsize=(9.6, 9.6))
     show(axes[0, 0], ref.camera, white=white, receiver=False, title="(a) reference camera")
     show(axes[0, 1], method.camera, white=white, receiver=False,
          title="(b) caustics mapping (paper)")
@@ -32,6 +33,10 @@ def figure_10(ctx: FigureContext):
          title="paper preset receiver irradiance")
     show(axes[1, 2], strong.receivers[0].irradiance, white=rwhite, receiver=True,
          title="strong preset receiver irradiance")
+    objects = object_difference_row(axes[2, 1:], scene=scene, reference=ref,
+                                    methods=[("paper preset", method),
+                                             ("strong preset", strong)])
+    axes[2, 0].set_axis_off()
     scores = receiver_scores(method.receivers[0].irradiance, ref.receivers[0].irradiance)
     strong_scores = receiver_scores(strong.receivers[0].irradiance,
                                     ref.receivers[0].irradiance)
@@ -42,7 +47,8 @@ def figure_10(ctx: FigureContext):
             "strong_frame_ms": strong_ms,
             **{f"strong_receiver_{k}": v for k, v in strong_scores.items()},
             "reference_photons": ref.metadata["photons"],
-            "reference_relative_noise": ref.metadata["relative_noise"]}
+            "reference_relative_noise": ref.metadata["relative_noise"],
+            "object": objects}
 
     data["triangles"] = len(build_geometry(scene).objects[0].mesh.faces)
     caption = (f"Fig. 10 analogue: Stanford bunny ({data['triangles']} triangles), double "
@@ -51,7 +57,11 @@ def figure_10(ctx: FigureContext):
                f"FLIP {scores['flip']:.3f}, flux ratio {scores['flux_ratio']:.3f}; "
                f"caustics mapping {ms:.1f} ms per frame (grid {scene.settings.grid}). "
                f"Strong preset: relMSE {strong_scores['relmse']:.3g}, flux ratio "
-               f"{strong_scores['flux_ratio']:.3f}, {strong_ms:.1f} ms per frame.")
+               f"{strong_scores['flux_ratio']:.3f}, {strong_ms:.1f} ms per frame. Over the "
+               "bunny (camera): " + "; ".join(
+                   f"{o['method']} relMSE {o['object_relmse']:.3g}, SSIM "
+                   f"{o['object_ssim']:.3f}, FLIP {o['object_flip']:.3f}" for o in objects)
+               + ".")
     return ctx.save("fig10", fig, caption=caption, data=data)
 
 
@@ -69,17 +79,24 @@ def figure_13a(ctx: FigureContext):
         ratio = np.where(a > 0, b / np.maximum(a, 1e-30), np.nan)
         rows.append({"renderer": renderer, "transmitted_r": float(ratio[0]),
                      "transmitted_g": float(ratio[1]), "transmitted_b": float(ratio[2])})
-    fig, axes = plt.subplots(1, 2, figsize=(6.4, 3.2))
+    fig, grid = plt.subplots(2, 3, figsize=(9.6, 6.4))
     ref_img = results[("reference", "colored_bunny")].receivers[0].irradiance
     white = shared_white(ref_img)
-    show(axes[0], results[("caustics mapping", "colored_bunny")].receivers[0].irradiance,
+    show(grid[0, 0], results[("caustics mapping", "colored_bunny")].receivers[0].irradiance,
          white=white, receiver=True, title="caustics mapping")
-    show(axes[1], ref_img, white=white, receiver=True, title="reference")
+    show(grid[0, 1], ref_img, white=white, receiver=True, title="reference")
+    grid[0, 2].set_axis_off()
+    objects = camera_row(grid[1], scene=coloured,
+                         reference=results[("reference", "colored_bunny")],
+                         method=results[("caustics mapping", "colored_bunny")])
     table = Table.from_records(("renderer", "transmitted_r", "transmitted_g", "transmitted_b"),
                                rows)
     k = coloured.objects[0].material.absorption
     caption = (f"Fig. 13a analogue: absorbing bunny (K_a = {k[0]:g}, {k[1]:g}, {k[2]:g} 1/m). "
                "Caustic flux relative to the clear bunny (R, G, B): " + "; ".join(
                    f"{r['renderer']} {r['transmitted_r']:.3f}, {r['transmitted_g']:.3f}, "
-                   f"{r['transmitted_b']:.3f}" for r in rows))
-    return ctx.save("fig13a", fig, caption=caption, table=table)
+                   f"{r['transmitted_b']:.3f}" for r in rows)
+               + ". Over the bunny (camera): " + "; ".join(
+                   f"{o['method']} relMSE {o['object_relmse']:.3g}, FLIP {o['object_flip']:.3f}"
+                   for o in objects) + ".")
+    return ctx.save("fig13a", fig, caption=caption, table=table, data={"object": objects})

@@ -6,6 +6,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
+from harness.figures.camera import camera_row, object_difference_row
 from harness.figures.common import FigureContext, receiver_scores, shared_white, show
 from harness.metrics import false_colour
 from harness.studies.runner import frame_seconds
@@ -38,7 +39,8 @@ def figure_06(ctx: FigureContext):
     runs = _sphere_runs(ctx)
     ref = runs["reference"]
     white = shared_white(ref.camera)
-    fig, axes = plt.subplots(1, 4, figsize=(12, 3.2))
+    fig, grid = plt.subplots(2, 4, figsize=(12, 6.6))
+    axes = grid[0]
     rows, parts = [], []
     strong = resolve_settings(ctx.scene("glass_sphere", preset="strong").settings)
     entries = [(label, estimator, "paper", 3) for label, estimator in METHODS]
@@ -55,13 +57,24 @@ def figure_06(ctx: FigureContext):
         parts.append(f"{label}: receiver relMSE {scores['relmse']:.3g}, SSIM "
                      f"{scores['ssim']:.3f}, FLIP {scores['flip']:.3f}, frame {ms:.1f} ms")
     show(axes[3], ref.camera, white=white, receiver=False,
-         title=f"reference (Mitsuba ptracer)\n{ref.metadata['spp']} spp x {ref.metadata['seeds']}")
+         title=f"reference ({ref.metadata['camera_integrator']})\n"
+               f"{ref.metadata['spp']} spp x {ref.metadata['seeds']}")
+    scene = ctx.scene("glass_sphere")
+    objects = object_difference_row(grid[1, :3], scene=scene, reference=ref,
+                                    methods=[(e[0], runs[e[1]]) for e in entries])
+    grid[1, 3].set_axis_off()
+    rows = [(*row, o["object_relmse"], o["object_ssim"], o["object_flip"])
+            for row, o in zip(rows, objects, strict=True)]
     table = Table(("method", "estimator", "preset", "iterations", "receiver_relmse",
-                   "receiver_ssim", "receiver_flip", "flux_ratio", "frame_ms"), tuple(rows))
-    s = ctx.scene("glass_sphere").settings
+                   "receiver_ssim", "receiver_flip", "flux_ratio", "frame_ms",
+                   "object_relmse", "object_ssim", "object_flip"), tuple(rows))
+    s = scene.settings
     caption = (f"Fig. 6 analogue: glass sphere, grid {s.grid}, caustic map {s.caustic_map}, "
                f"3 iterations (paper preset; the strong preset: its safeguarded "
                f"{strong.estimator}, {strong.iterations} iterations). " + "; ".join(parts)
+               + ". Over the sphere (camera): " + "; ".join(
+                   f"{o['method']} relMSE {o['object_relmse']:.3g}, FLIP {o['object_flip']:.3f}"
+                   for o in objects)
                + f". Reference: {ref.metadata['photons']} "
                f"photons x {ref.metadata['seeds']} seeds (relative noise "
                f"{ref.metadata['relative_noise']:.3g}). Times on llvmpipe unless stated.")
@@ -138,7 +151,10 @@ def figure_13b(ctx: FigureContext):
     scene = ctx.scene("dispersion_sphere")
     ref, method = ctx.reference(scene), ctx.realtime(scene)
     extent = ref.receivers[0].extent
-    fig, axes = plt.subplots(1, 2, figsize=(6.4, 3.2))
+    fig, grid = plt.subplots(2, 3, figsize=(9.6, 6.4))
+    axes = grid[0, :2]
+    grid[0, 2].set_axis_off()
+    objects = camera_row(grid[1], scene=scene, reference=ref, method=method)
     rows = []
     white = shared_white(ref.receivers[0].irradiance)
     for ax, (label, result) in zip(axes, (("caustics mapping", method), ("reference", ref)),
@@ -156,8 +172,11 @@ def figure_13b(ctx: FigureContext):
     spread = {name: max(values) - min(values) for name, values in radii.items()}
     caption = ("Fig. 13b analogue: dispersion (IOR " + ", ".join(
         f"{n:g}" for n in scene.objects[0].material.iors) + "). Spread of the channels' "
-        "caustic radii: " + "; ".join(f"{k} {v * 1e3:.1f} mm" for k, v in spread.items()))
-    return ctx.save("fig13b", fig, caption=caption, table=table)
+        "caustic radii: " + "; ".join(f"{k} {v * 1e3:.1f} mm" for k, v in spread.items())
+        + ". Over the sphere (camera): " + "; ".join(
+            f"{o['method']} relMSE {o['object_relmse']:.3g}, FLIP {o['object_flip']:.3f}"
+            for o in objects) + ".")
+    return ctx.save("fig13b", fig, caption=caption, table=table, data={"object": objects})
 
 
 def _centroid(channel: np.ndarray, extent) -> tuple[float, float, float]:
