@@ -70,8 +70,9 @@ __all__ = ["CAMERA_INTEGRATORS", "FORMAT_VERSION", "STALE_AFTER", "CacheEntryErr
 #: mode follows paths up to a 64-event safety cap (was 8) and records the cut flux;
 #: 5: the key leaves out the scene's name and description, result.json records each
 #: EXR's size and its own digest (``shapes``, ``document_sha256``); 6: the camera image
-#: is the camera tracer's by default (``camera_integrator``, part of the key)
-FORMAT_VERSION = 6
+#: is the camera tracer's by default (``camera_integrator``, part of the key); 7: a
+#: photon drawn on its emission cone's or disk's edge no longer gets an infinite weight
+FORMAT_VERSION = 7
 RESULT_JSON = "result.json"
 #: Seconds after which a temporary folder left by a killed writer is removed.
 STALE_AFTER = 3600.0

@@ -227,7 +227,10 @@ def sample_photons(light, targets: list[Target], rng, scene_center, scene_radius
         for k, t in enumerate(targets):
             rel = origin - mi.Point3f(*t.center)
             perp = rel - frame.n * dr.dot(rel, frame.n)
-            pdf += dr.select(dr.squared_norm(perp) <= t.radius**2, q[k] / areas[k], 0.0)
+            # The disk a ray was drawn from holds it even where float rounding puts it
+            # a hair outside (a boundary of measure zero: no bias, no infinite weight).
+            inside = (dr.squared_norm(perp) <= t.radius**2) | (j == k)
+            pdf += dr.select(inside, q[k] / areas[k], 0.0)
         weight = mi.Color3f(*light.irradiance) / pdf
         return mi.Ray3f(origin, frame.n), weight
 
@@ -255,7 +258,11 @@ def sample_photons(light, targets: list[Target], rng, scene_center, scene_radius
     d = mi.Frame3f(axis).to_world(local)
     pdf = mi.Float(0.0)
     for k in range(len(targets)):
-        inside = dr.dot(d, mi.Vector3f(*map(float, axes[k]))) >= cosines[k]
+        # The cone a direction was drawn from holds it even where float rounding puts
+        # it a hair outside: otherwise the mixture pdf could be 0 and the weight
+        # I / 1e-30 (about once per million photons; the boundary has measure zero,
+        # so counting it inside biases nothing).
+        inside = (dr.dot(d, mi.Vector3f(*map(float, axes[k]))) >= cosines[k]) | (j == k)
         pdf += dr.select(inside, q[k] / omegas[k], 0.0)
     intensity = mi.Color3f(*light.intensity)
     if isinstance(light, SpotLight):
