@@ -9,8 +9,7 @@ at the budget. Seed k draws from PCG32 streams keyed by (seed k, round), so what
 seed traces does not depend on the others.
 
 Here each seed is a task (:func:`trace_seed`): it traces that seed's whole budget
-in the same rounds and returns the per-round sums, and its camera image
-(ptracer, ``spp`` per pixel, same seed as in ``render_reference``). The merge
+in the same rounds and returns the per-round sums. The merge
 (:func:`merge_reference`) replays the rounds in order with the same arithmetic
 (float64 sums, the same noise and stopping rule) and so produces the estimate a
 single process would have produced with the same seeds: the same maps up to the
@@ -19,6 +18,12 @@ differs between any two runs, in one process too), the same photon count, noise
 history and stop. Rounds after the stop are traced but not used (seeds run in
 parallel, so the stop is known only at the merge); the result records how many
 rounds it used of how many traced.
+
+The camera image is traced by the merge, after the replay: the camera tracer's
+caustic lookup maps take their photon count from the photons the receiver maps
+used (:func:`renderers.mitsuba.camera_trace.render_traced_camera`, called exactly
+as ``render_reference`` calls it), and only the replay knows that count. So the
+camera is not parallel over seeds; it is the same image a single process makes.
 
 The merged result is a :class:`renderers.results.RenderResult` with the same
 metadata as ``render_reference`` writes, so the client stores it in the reference
@@ -34,10 +39,7 @@ import numpy as np
 
 from harness.sweep.worker import worker_name
 from renderers.mitsuba import _mi
-from renderers.mitsuba.camera import (
-    camera_cut_fraction,
-    render_camera,
-)
+from renderers.mitsuba.camera_trace import render_traced_camera
 from renderers.mitsuba.noise import caustic_region, relative_noise, seed_statistics
 from renderers.mitsuba.photons import (
     DEFAULT_BATCH,
@@ -82,9 +84,6 @@ class SeedBatch:
         Each receiver's (u, v) extent.
     channel_passes : int
         Photon-tracer passes per photon: 1, or 3 with dispersion.
-    camera : ndarray, (H, W, 3), float32
-        This seed's ptracer camera image (W m^-2 sr^-1).
-    camera_seconds : float
     worker : str
         The Dask worker that traced it.
     versions : dict
@@ -100,8 +99,6 @@ class SeedBatch:
     seconds: tuple[float, ...]
     extents: tuple[tuple[float, float, float, float], ...]
     channel_passes: int
-    camera: np.ndarray
-    camera_seconds: float
     worker: str
     versions: dict
 
@@ -109,7 +106,7 @@ class SeedBatch:
 def trace_seed(scene: Scene, index: int, *, batch: int = DEFAULT_BATCH) -> SeedBatch:
     """Trace seed ``scene.settings.seed + index`` of the reference: its whole photon
     budget in rounds of ``batch`` (as :func:`~renderers.mitsuba.reference.estimate_receivers`
-    does), caustic maps only, and its camera image. A Dask task."""
+    does), caustic maps only. A Dask task."""
     s = scene.settings
     seed = s.seed + index
     geometry = build_geometry(scene)
@@ -128,13 +125,10 @@ def trace_seed(scene: Scene, index: int, *, batch: int = DEFAULT_BATCH) -> SeedB
         seconds.append(time.perf_counter() - start)
         traced += sums.photons
         stream += 1
-    start = time.perf_counter()
-    camera = render_camera(scene, spp=s.spp, seed=seed, geometry=geometry)
     return SeedBatch(index=index, seed=seed, rounds=tuple(rounds), photons=tuple(photons),
                      emitted=tuple(emitted), cut=tuple(cut), seconds=tuple(seconds),
                      extents=tuple(tuple(e) for e in tracer.extents),
-                     channel_passes=len(tracer.channels), camera=camera,
-                     camera_seconds=time.perf_counter() - start, worker=worker_name(),
+                     channel_passes=len(tracer.channels), worker=worker_name(),
                      versions=_mi.versions())
 
 
@@ -205,23 +199,26 @@ def merge_reference(scene: Scene, key: str, versions: dict,
     start = time.perf_counter()
     caustic, traced, noise, stopped, history, used, emitted, cut = _replay(
         batches, s.target_noise)
-    frames = np.stack([b.camera for b in batches])
-    camera, camera_var = seed_statistics(frames)
-    camera_cut = camera_cut_fraction(scene, spp=s.spp, seed=s.seed, image=batches[0].camera)
+    merged = time.perf_counter() - start
+    traced_camera = render_traced_camera(scene, photons=traced)
     metadata = reference_metadata(
         scene, key=key, versions=versions, photons=traced,
         channel_passes=batches[0].channel_passes, relative_noise=noise, stopped_by=stopped,
-        history=history, cut_fraction=cut_fraction(emitted, cut), camera_cut=camera_cut,
-        camera_variance=camera_var)
+        history=history, cut_fraction=cut_fraction(emitted, cut),
+        camera_cut=traced_camera.cut_fraction, camera_variance=traced_camera.variance,
+        lookup=traced_camera.plan)
     metadata["cache"] = f"miss (merged from {len(batches)} seed tasks)"
     metadata["sweep"] = {"seed_tasks": len(batches), "rounds_traced": len(batches[0].rounds),
                          "rounds_used": used, "workers": sorted({b.worker for b in batches}),
                          "merged_by": worker_name()}
     timings = {"receiver_maps": history[-1][2] if history else 0.0,
-               "camera": max(b.camera_seconds for b in batches),
-               "merge": time.perf_counter() - start}
+               "camera_lookup_maps": traced_camera.seconds["lookup_maps"],
+               "camera": traced_camera.seconds["camera"],
+               "merge": merged}
     return RenderResult(
-        renderer="mitsuba", camera=camera.astype(np.float32), receivers=tuple(caustic),
+        renderer="mitsuba", camera=traced_camera.image.astype(np.float32),
+        receivers=tuple(caustic),
         effects=effects_of(scene), timings=timings,
-        timer=f"{TIMER}; seeds traced in parallel, one task each: the slowest seed's",
+        timer=f"{TIMER}; seeds traced in parallel, one task each: the slowest seed's; "
+              "the camera traced by the merge",
         metadata=metadata)
