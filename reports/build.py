@@ -8,11 +8,20 @@ Layout written under ``out_dir``::
     <folder>/index.html     one scene; <folder> = scene_folder(name)
     <folder>/*.png, *.svg   previews and plots (not with self_contained)
     <folder>/hdr.js         HDR previews as data: URIs (not with self_contained)
+    <folder>/data_<view>.js float32 data of each view, base64 (not with self_contained)
+    <folder>/profile_<view>.csv  default profile of each receiver map (not with
+                            self_contained: a data: URI link there)
 
 Templates are jinja2 with autoescaping on, so every text from a scene file (name,
 description, settings, provenance) renders inert. HDR previews always reach the
 page as ``data:`` URIs, because Chromium taints a canvas drawn from a ``file://``
-image and the exposure control must read pixels back.
+image and the exposure control must read pixels back. The views' float data
+(:func:`reports.panels.view_data`) come as scripts for the same reason (no fetch on
+``file://``), one per view, loaded before the page script.
+
+The page script ``report.js`` is one file made of the readable sources in
+``reports/static`` (:data:`SCRIPT_PARTS`, in order), so every page, the sweep's
+included, loads one vendored script.
 """
 
 from __future__ import annotations
@@ -35,7 +44,7 @@ from markupsafe import Markup
 
 from reports import plots
 from reports.decomposition import decomposition_section
-from reports.panels import Assets, hdr_script, thumbnails, view_panels, views
+from reports.panels import Assets, data_script, hdr_script, thumbnails, view_panels, views
 from reports.records import (
     CHECK_KIND_MEANING,
     CHECK_KINDS,
@@ -60,14 +69,20 @@ KEY_METRICS = (
     ("receiver0", "caustic", "relmse"),
     ("receiver0", "caustic", "flip"),
     ("receiver0", "full", "flux_ratio"),
+    ("camera", "object", "relmse"),
+    ("camera", "object", "ssim"),
+    ("camera", "object", "flip"),
     ("camera", "object_masked", "ssim"),
     ("camera", "object_masked", "flip"),
 )
-REGION_ORDER = ("full", "caustic", "object_masked")
+REGION_ORDER = ("full", "caustic", "object", "object_masked")
 #: A page shows its flux budget when the method's flux ratio (receiver 0, whole map)
 #: is outside this range, or not a number.
 FLUX_RATIO_RANGE = (0.5, 2.0)
 _RESERVED = {"index.html"}
+#: Sources of the page script ``report.js``, concatenated in this order: shared data
+#: helpers, zoom and pan, the probe, profiles, then the page's main part.
+SCRIPT_PARTS = ("view_data.js", "zoom.js", "probe.js", "profile.js", "report.js")
 
 
 def scene_folder(name: str, *, taken: Sequence[str] = ()) -> str:
@@ -123,8 +138,14 @@ def _environment() -> jinja2.Environment:
     return env
 
 
+@cache
 def _static(name: str) -> str:
-    return resources.files("reports").joinpath("static", name).read_text("utf-8")
+    """A vendored static file; ``report.js`` is the bundle of :data:`SCRIPT_PARTS`."""
+    folder = resources.files("reports").joinpath("static")
+    if name == "report.js":
+        return "\n".join(f"/* ---- {part} ---- */\n" + folder.joinpath(part).read_text("utf-8")
+                         for part in SCRIPT_PARTS)
+    return folder.joinpath(name).read_text("utf-8")
 
 
 def _inline_script(text: str) -> Markup:
@@ -243,6 +264,8 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
               for view in views(comparison)]
     script = hdr_script(panels)
     hdr_inline = _inline_script(script) if self_contained else ""
+    data = {f"data_{p['view']}.js": data_script(p) for p in panels if p["data"] is not None}
+    data_inline = [_inline_script(text) for text in data.values()] if self_contained else []
     temporal = temporal_section(comparison, assets)
     temporal_js = temporal_script(temporal)
     temporal_inline = _inline_script(temporal_js) if self_contained and temporal_js else ""
@@ -262,14 +285,19 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
         "settings": jsonable(comparison.settings),
         "stability": jsonable(comparison.stability),
         "hdr_inline": hdr_inline,
+        "data_inline": data_inline,
+        "data_files": [] if self_contained else list(data),
         "preview_size": preview_size,
         "temporal": temporal,
         "temporal_inline": temporal_inline,
         "decomposition": decomposition_section(comparison, assets),
-        **_page_context(self_contained, hdr_inline, *filter(None, [temporal_inline])),
+        **_page_context(self_contained, hdr_inline, *data_inline,
+                        *filter(None, [temporal_inline])),
     }
     if not self_contained:
         atomic_write_bytes(folder / "hdr.js", script.encode("utf-8"))
+        for name, text in data.items():
+            atomic_write_bytes(folder / name, text.encode("utf-8"))
         if temporal_js:
             atomic_write_bytes(folder / "temporal.js", temporal_js.encode("utf-8"))
     html = _environment().get_template("scene.html.j2").render(context)

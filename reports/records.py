@@ -35,11 +35,15 @@ if TYPE_CHECKING:  # the temporal record imports Table from here
 __all__ = [
     "CHECK_KINDS",
     "CHECK_KIND_MEANING",
+    "CLAIM_VERDICTS",
     "METRIC_FORMULAS",
+    "ClaimVerdict",
     "EqualErrorSpeedup",
+    "Headline",
     "MetricValue",
     "SceneComparison",
     "SceneFailure",
+    "SpeedupWithheld",
     "Table",
     "ThresholdCheck",
 ]
@@ -76,6 +80,92 @@ class EqualErrorSpeedup:
 
 
 @dataclass(frozen=True)
+class SpeedupWithheld:
+    """An equal-error speedup the report does not show, and why
+    (``harness.compare.headlines``).
+
+    Attributes
+    ----------
+    reason : str
+        One sentence: the bound the error broke, with the numbers.
+    warm, cold : EqualErrorSpeedup or None
+        The speedups computed (kept for metrics.json, not shown).
+    short : str
+        The reason in a few words (the CLI's summary table).
+    """
+
+    reason: str
+    warm: EqualErrorSpeedup | None = None
+    cold: EqualErrorSpeedup | None = None
+    short: str = ""
+
+
+#: A paper claim's verdict: it holds or fails by more than twice its standard error,
+#: or the margin is within that (undecided); or it could not be measured.
+CLAIM_VERDICTS = ("holds", "does not hold", "undecided at this noise", "not measured")
+
+
+@dataclass(frozen=True)
+class ClaimVerdict:
+    """One of the paper's claims against a measured number and its uncertainty
+    (``harness.studies.claims``).
+
+    Attributes
+    ----------
+    claim : str
+        The claim, as the report names it.
+    verdict : str
+        One of :data:`CLAIM_VERDICTS`.
+    value, bound : float
+        The measured quantity and the largest value for which the claim holds.
+    standard_error : float or None
+        One standard error of ``value`` (None: not known).
+    quantity : str
+        What ``value`` is, with its units.
+    uncertainty : str
+        Where ``standard_error`` comes from.
+    text : str
+        The sentence the report shows (verdict first, then the numbers).
+    """
+
+    claim: str
+    verdict: str
+    value: float
+    bound: float
+    standard_error: float | None
+    quantity: str
+    uncertainty: str
+    text: str
+
+    @property
+    def margin(self) -> float:
+        """bound − value: positive where the claim holds."""
+        return self.bound - self.value
+
+
+@dataclass(frozen=True)
+class Headline:
+    """A banner at the top of a scene's page (``harness.compare.headlines``).
+
+    Attributes
+    ----------
+    kind : str
+        ``reference_noise`` (the reference missed its noise target),
+        ``noise_floor`` (the method's error is within the reference's noise),
+        ``speedup`` (the equal-error speedup, or why it is withheld), ``claim``
+        (a paper claim's verdict), ``budget`` (a flux budget that does not close).
+    level : str
+        ``warning`` (read before any number below) or ``note``.
+    text : str
+        One or two sentences with the numbers.
+    """
+
+    kind: str
+    level: str
+    text: str
+
+
+@dataclass(frozen=True)
 class MetricValue:
     """One metric of the real-time render, beside the reference's noise floor.
 
@@ -85,7 +175,9 @@ class MetricValue:
         ``camera`` or ``receiver<i>``.
     region : str
         ``full`` (the whole receiver map or image), ``caustic`` (reference above
-        the caustic threshold) or ``object_masked`` (camera without the object).
+        the caustic threshold), ``object`` (camera pixels inside a caustic object's
+        silhouette: the object seen through) or ``object_masked`` (camera without
+        the object and its silhouette).
     metric : str
         A key of :data:`METRIC_FORMULAS`.
     value : float
@@ -243,6 +335,22 @@ class SceneComparison:
         Where the light went (``harness.compare.budget``). Columns: item, flux_w,
         fraction (of the traced flux); the report shows it when the flux ratio is
         far from 1.
+    method_budget, reference_budget : Table or None
+        Each side's flux budget in watts per RGB channel
+        (``harness.compare.budget.SIDE_COLUMNS``): emitted toward the object, where
+        it went, and what is unaccounted; the reference's from a separate
+        caustic-only trace (``budget_trace``), with standard errors.
+    budget_trace : dict or None
+        Provenance of the reference's budget trace (photons, launches, seed, stream,
+        seconds, emitted and unaccounted watts).
+    headlines : tuple of Headline
+        Banners at the top of the page (``harness.compare.headlines``).
+    claim_verdicts : tuple of ClaimVerdict
+        The paper's claims with the uncertainty of their numbers (``claims`` holds
+        the same verdicts as sentences).
+    speedup_withheld : SpeedupWithheld or None
+        Set when the equal-error speedup is not meaningful (``speedup`` and
+        ``speedup_cold`` are then None): why, and the values computed.
     """
 
     name: str
@@ -270,6 +378,12 @@ class SceneComparison:
     timing: dict[str, Any] | None = None
     temporal: TemporalComparison | None = None
     decomposition: DecompositionRecord | None = None
+    method_budget: Table | None = None
+    reference_budget: Table | None = None
+    budget_trace: dict[str, Any] | None = None
+    headlines: tuple[Headline, ...] = ()
+    claim_verdicts: tuple[ClaimVerdict, ...] = ()
+    speedup_withheld: SpeedupWithheld | None = None
 
     @property
     def page(self) -> str:

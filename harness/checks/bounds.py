@@ -6,7 +6,7 @@ Regression locks (``data/regression_locks.toml``, written by ``caustics calibrat
     [[lock]]
     scene = "glass_sphere"
     view = "receiver0"          # camera | receiver<i>
-    region = "caustic"          # full | caustic | object_masked
+    region = "caustic"          # full | caustic | object | object_masked
     metric = "relmse"           # see reports.records.METRIC_FORMULAS
     kind = "max"                # max: value <= bound; min: value >= bound;
                                 # band: |value - 1| <= bound (flux ratio)
@@ -83,7 +83,7 @@ class Bound:
 
     scene: str = spec(doc="Scene name.")
     view: str = spec(doc="camera or receiver<i>.")
-    region: Literal["full", "caustic", "object_masked"] = spec(doc="Region scored.")
+    region: Literal["full", "caustic", "object", "object_masked"] = spec(doc="Region scored.")
     metric: str = spec(doc="Metric key.")
     kind: Literal["max", "min", "band"] = spec(doc="How the bound applies.")
     bound: float = spec(doc="The bound.", ge=0)
@@ -113,7 +113,8 @@ class Target:
     bound: float = spec(doc="The target.", ge=0)
     reason: str = spec(doc="Why this number: where it comes from.")
     view: str = spec("receiver0", doc="camera or receiver<i>.")
-    region: Literal["full", "caustic", "object_masked"] = spec("caustic", doc="Region.")
+    region: Literal["full", "caustic", "object", "object_masked"] = spec("caustic",
+                                                                       doc="Region.")
     contrast: str = spec("", doc="A method that misses the target (shows it can fail).")
     gap: str = spec("", doc="Non-empty: missed today; names the gap.")
 

@@ -33,7 +33,7 @@ from reports.build import write_index
 from reports.records import SceneFailure
 from scenes import SCENES_DIR, Scene, SceneError, default_scene_path, parse_override, with_settings
 
-__all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "summary_rows"]
+__all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "headline_lines", "summary_rows"]
 
 #: Methods compared when none is named: both caustics-mapping presets.
 DEFAULT_METHODS = ("paper", "strong")
@@ -61,6 +61,8 @@ def summary_rows(comparisons) -> list[tuple[str, ...]]:
         frame = timing.get("maps_time_ms", timing.get("frame_time_ms"))
         speedup = (f"{c.speedup.speedup:.3g}x / {c.speedup_cold.speedup:.3g}x"
                    if c.speedup and c.speedup_cold else "–")
+        if c.speedup_withheld is not None:  # not meaningful (harness.compare.headlines)
+            speedup = f"withheld: {c.speedup_withheld.short}"
         passed = sum(t.passed for t in c.thresholds)
         gaps = sum(t.outcome == "known gap" for t in c.thresholds)
         bounds = (f"{passed}/{len(c.thresholds)}"
@@ -71,6 +73,15 @@ def summary_rows(comparisons) -> list[tuple[str, ...]]:
                      f"{frame:.1f}" if frame is not None and math.isfinite(frame) else "–",
                      speedup, bounds))
     return rows
+
+
+def headline_lines(comparisons) -> list[str]:
+    """The pages' warnings (``harness.compare.headlines``: a reference that missed
+    its noise target, an error within the noise floor, a withheld speedup, a claim
+    undecided at this noise, a budget that does not close), one line each (plain
+    text)."""
+    return [f"warning: {c.page}: {h.text}" for c in comparisons
+            if not isinstance(c, SceneFailure) for h in c.headlines if h.level == "warning"]
 
 
 def check_count_lines(comparisons) -> list[str]:
@@ -107,6 +118,8 @@ def _print_summary(comparisons, out_dir: Path, seconds: float) -> None:
         console = Console(width=160)
     console.print(table)
     for line in check_count_lines(comparisons):
+        console.print(markup(line))
+    for line in headline_lines(comparisons):
         console.print(markup(line))
     for c in comparisons:
         # A scene that did not validate had its problems printed before the run.

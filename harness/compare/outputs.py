@@ -17,7 +17,7 @@ from renderers.exr import write_exr
 from reports.records import METRIC_FORMULAS, SceneComparison, Table
 from scenes.files import atomic_write_bytes, dumps_strict
 
-__all__ = ["comparison_json", "write_comparison", "write_json", "write_table"]
+__all__ = ["budget_table", "comparison_json", "write_comparison", "write_json", "write_table"]
 
 
 def write_json(path: str | Path, data: Any) -> None:
@@ -37,12 +37,32 @@ def write_table(path: str | Path, table: Table) -> None:
 
 def _speedups(comparison: SceneComparison) -> dict[str, Any] | None:
     """Both equal-error speedups and the timing policy they follow, or None when
-    no cost study ran."""
+    no cost study ran. A withheld speedup keeps its values, with ``shown`` false and
+    the reason (``harness.compare.headlines``)."""
     if comparison.timing is None:
         return None
-    return {"warm": asdict(comparison.speedup) if comparison.speedup else None,
-            "cold": asdict(comparison.speedup_cold) if comparison.speedup_cold else None,
+    withheld = comparison.speedup_withheld
+    warm = comparison.speedup or (withheld.warm if withheld else None)
+    cold = comparison.speedup_cold or (withheld.cold if withheld else None)
+    return {"warm": asdict(warm) if warm else None, "cold": asdict(cold) if cold else None,
+            "shown": withheld is None,
+            "withheld_because": withheld.reason if withheld else None,
             **comparison.timing}
+
+
+def _records(table: Table | None) -> list[dict[str, Any]] | None:
+    return table.records() if table is not None else None
+
+
+def budget_table(comparison: SceneComparison) -> Table | None:
+    """Both sides' flux budgets in one table (``side`` first), for budget.csv."""
+    sides = [(side, t) for side, t in (("method", comparison.method_budget),
+                                       ("reference", comparison.reference_budget))
+             if t is not None]
+    if not sides:
+        return None
+    columns = ("side", *sides[0][1].columns)
+    return Table(columns, tuple((side, *row) for side, t in sides for row in t.rows))
 
 
 def comparison_json(comparison: SceneComparison) -> dict[str, Any]:
@@ -60,6 +80,11 @@ def comparison_json(comparison: SceneComparison) -> dict[str, Any]:
         "thresholds": [asdict(t) for t in comparison.thresholds],
         "stability": comparison.stability,
         "flux_budget": comparison.flux_budget.records() if comparison.flux_budget else None,
+        "budgets": {"method": _records(comparison.method_budget),
+                    "reference": _records(comparison.reference_budget),
+                    "reference_trace": comparison.budget_trace},
+        "headlines": [asdict(h) for h in comparison.headlines],
+        "claim_verdicts": [asdict(v) for v in comparison.claim_verdicts],
         "crosscheck": comparison.crosscheck.records() if comparison.crosscheck else None,
         "provenance": comparison.provenance,
         "temporal": temporal_json(comparison.temporal),
@@ -70,7 +95,8 @@ def comparison_json(comparison: SceneComparison) -> dict[str, Any]:
 
 
 def write_comparison(scene_dir: str | Path, comparison: SceneComparison) -> None:
-    """Write metrics.json, convergence.csv, cost_accuracy.csv, temporal.csv with the
+    """Write metrics.json, convergence.csv, cost_accuracy.csv, flux_budget.csv (both
+    sides' budgets, :func:`budget_table`), temporal.csv with the
     temporal maps (``harness.compare.temporal_outputs``), decomposition.csv and the EXR originals
     named in ``comparison.files`` (keys ``<view>/<kind>`` of ``comparison.images``)."""
     scene_dir = Path(scene_dir)
@@ -87,4 +113,7 @@ def write_comparison(scene_dir: str | Path, comparison: SceneComparison) -> None
         write_temporal_maps(scene_dir, comparison.temporal)
     if comparison.decomposition is not None:
         write_table(scene_dir / "decomposition.csv", comparison.decomposition.table)
+    budgets = budget_table(comparison)
+    if budgets is not None:
+        write_table(scene_dir / "flux_budget.csv", budgets)
     write_json(scene_dir / "metrics.json", comparison_json(comparison))

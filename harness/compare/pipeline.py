@@ -6,8 +6,11 @@ settings); the Mitsuba reference (from the cache when present, shared by every
 method) and an independent reference on disjoint seeds (the noise floor); the
 method's render (median frame time over repeats after a warm-up); metrics per view
 and region; for the caustics-mapping presets, the convergence table, the
-cost-versus-accuracy sweep with the equal-error speedup, and the paper's claims;
-provenance.
+cost-versus-accuracy sweep with the equal-error speedup, and the paper's claims
+with their uncertainties (``harness.studies.claims``); both sides' flux budgets
+(``harness.compare.budget``: the reference's from a separate caustic-only trace);
+provenance; the page's headlines, which withhold a speedup that means nothing
+(``harness.compare.headlines``).
 """
 
 from __future__ import annotations
@@ -23,10 +26,11 @@ import numpy as np
 from tqdm import tqdm
 
 from harness.checks.stability import stability_summary
-from harness.compare.budget import flux_budget
+from harness.compare.budget import flux_budget, side_budgets
 from harness.compare.evaluate import exposure_for, score_view
-from harness.compare.regions import caustic_region, object_mask
-from harness.studies.claims import check_five_iterations, check_one_iteration
+from harness.compare.headlines import with_headlines
+from harness.compare.regions import caustic_region, object_mask, object_region
+from harness.studies.claims import paper_claims
 from harness.studies.convergence_study import convergence_study
 from harness.studies.cost_study import cost_study, sweep_size
 from harness.studies.decomposition import DecompositionOptions, decomposition_study
@@ -108,13 +112,14 @@ def _references(scene: Scene, options: CompareOptions):
 
 
 def _camera_is_blind(reference: np.ndarray, method: np.ndarray) -> bool:
-    """The reference camera image is black where the real-time one is lit: ptracer
-    cannot connect receivers seen only through a specular surface (everything under
-    a water surface). Blind when, over the pixels the real-time image lights (above
-    1 % of its 99th-percentile luminance), the reference holds under 10 % of the
-    real-time image's energy. ptracer is unbiased, so this holds at any sample count
-    (at 2 spp most pixels are still black), while a few stray particles (seabed:
-    about 1 % of the energy) do not make a usable reference."""
+    """A ``ptracer`` reference camera image is black where the real-time one is lit:
+    ptracer cannot connect receivers seen only through a specular surface
+    (everything under a water surface). Blind when, over the pixels the real-time
+    image lights (above 1 % of its 99th-percentile luminance), the reference holds
+    under 10 % of the real-time image's energy. ptracer is unbiased, so this holds at
+    any sample count (at 2 spp most pixels are still black), while a few stray
+    particles (seabed: about 1 % of the energy) do not make a usable reference. The
+    default camera tracer sees through specular surfaces and is never blind."""
     rt = luminance(method)
     top = float(np.percentile(rt, 99))
     if top <= 0:
@@ -144,16 +149,27 @@ class _View(NamedTuple):
 
 
 def _views(scene: Scene, geometry, method, reference, independent):
-    """The views to score, and why the camera is left out (None if it is not)."""
+    """The views to score, and why the camera is left out (None if it is not).
+
+    The camera view has three regions: ``full``; ``object``, the pixels inside a
+    caustic object's silhouette (the object seen through, scored like any other
+    region); and ``object_masked``, the rest of the frame. The silhouette's own
+    pixels, where the renderers' rasterisation and sampling differ, are in neither
+    of the last two. A ``ptracer`` reference renders the object black, so its
+    ``object`` region is not scored.
+    """
     views, note = [], None
-    if _camera_is_blind(reference.camera, method.camera):
+    ptracer = reference.metadata.get("camera_integrator") == "ptracer"
+    if ptracer and _camera_is_blind(reference.camera, method.camera):
         note = ("camera not compared: the reference camera image is black "
                 "(ptracer cannot see receivers through a specular surface)")
     else:
         obj = object_mask(scene.camera, geometry)
+        regions = {"full": np.ones(obj.shape, bool), "object_masked": ~obj}
+        if not ptracer:
+            regions["object"] = object_region(scene.camera, geometry)
         views.append(_View("camera", method.camera, reference.camera, independent.camera,
-                           {"full": np.ones(obj.shape, bool), "object_masked": ~obj},
-                           {"mask_object": obj}, ~obj))
+                           regions, {"mask_object": obj}, ~obj if ptracer else None))
     for i, (method_map, ref_map, ind_map) in enumerate(zip(
             method.receivers, reference.receivers, independent.receivers, strict=True)):
         caustic = caustic_region(ref_map.irradiance)
@@ -191,11 +207,16 @@ def _score_views(views: list[_View]):
     return metrics, images, exposure, files
 
 
-def _reference_variance(reference) -> dict[str, np.ndarray]:
-    """``receiver<i>/reference_variance``: the variance of the reference's mean per
-    texel, which the physical requirements need (``harness.checks``); not written."""
-    return {f"receiver{i}/reference_variance": np.asarray(m.variance, np.float32)
-            for i, m in enumerate(reference.receivers) if m.variance is not None}
+def _reference_variance(reference, views: list[_View]) -> dict[str, np.ndarray]:
+    """``<view>/reference_variance``: the variance of the reference's mean per texel
+    (receivers) or pixel (the camera, when it is compared), which the physical
+    requirements (``harness.checks``) and the report's probes need; not written."""
+    out = {f"receiver{i}/reference_variance": np.asarray(m.variance, np.float32)
+           for i, m in enumerate(reference.receivers) if m.variance is not None}
+    camera = reference.metadata.get("camera_variance")
+    if camera is not None and any(v.name == "camera" for v in views):
+        out["camera/reference_variance"] = np.asarray(camera, np.float32)
+    return out
 
 
 def _timed_method(method: Method, scene: Scene, repeats: int):
@@ -225,7 +246,7 @@ def _compare_other(scene: Scene, method: Method, options: CompareOptions) -> Sce
     geometry = build_geometry(scene)
     views, camera_note = _views(scene, geometry, result, reference, independent)
     metrics, images, exposure, files = _score_views(views)
-    images.update(_reference_variance(reference))
+    images.update(_reference_variance(reference, views))
     provenance = {
         "scene_file": scene.source,
         "method": {"name": method.name, "renderer": result.renderer,
@@ -238,14 +259,15 @@ def _compare_other(scene: Scene, method: Method, options: CompareOptions) -> Sce
     if camera_note:
         provenance["camera_note"] = camera_note
     stability = stability_summary(scene, geometry, result, None)
-    return SceneComparison(
+    return with_headlines(SceneComparison(
         name=scene.name, description=scene.info.description, source=scene.source,
         effects=effects_of(scene), settings=asdict(scene.settings), metrics=tuple(metrics),
         images=images, exposure=exposure, provenance=provenance, files=files,
         stability=stability, method=method.name, method_description=method.description,
         flux_budget=flux_budget(result.metadata, stability, result.receivers,
                                 reference.receivers),
-        temporal=_temporal(scene, method, options))
+        **side_budgets(scene, result, stability, reference, geometry=geometry),
+        temporal=_temporal(scene, method, options)))
 
 
 def _temporal(scene: Scene, method: Method, options: CompareOptions, ctx=None):
@@ -289,10 +311,10 @@ def compare_scene(scene: Scene, *, method: Method | None = None,
         gl_renderer = runner.ctx.info.get("GL_RENDERER", "unknown")
         views, camera_note = _views(scene, runner.geometry, result, reference, independent)
         metrics, images, exposure, files = _score_views(views)
-        images.update(_reference_variance(reference))
+        images.update(_reference_variance(reference, views))
 
         convergence = cost = speedup = speedup_point = speedup_cold = timing = None
-        claims = {}
+        claims, verdicts = {}, ()
         ref0 = reference.receivers[0].irradiance
         caustic0 = caustic_region(ref0)
         studies = set(options.studies)
@@ -304,7 +326,8 @@ def compare_scene(scene: Scene, *, method: Method | None = None,
                                             exposure=exposure_for(ref0), progress=tick)
             if bar is not None:
                 bar.close()
-            claims = _claims(convergence)
+            claims, verdicts = paper_claims(convergence, runner=runner,
+                                            reference=reference.receivers[0], caustic=caustic0)
         if "cost" in studies:
             total = sweep_size(runner.settings, quick=options.quick)
             bar, tick = _progress_bar(total, options.progress, f"{scene.name}: cost sweep")
@@ -342,7 +365,7 @@ def compare_scene(scene: Scene, *, method: Method | None = None,
     }
     if camera_note:
         provenance["camera_note"] = camera_note
-    return SceneComparison(
+    return with_headlines(SceneComparison(
         name=scene.name, description=scene.info.description, source=scene.source,
         effects=effects_of(scene), settings=asdict(scene.settings), metrics=tuple(metrics),
         images=images, exposure=exposure, convergence=convergence, cost=cost,
@@ -352,7 +375,9 @@ def compare_scene(scene: Scene, *, method: Method | None = None,
         method_description=method.description,
         flux_budget=flux_budget(result.metadata, stability, result.receivers,
                                 reference.receivers),
-        temporal=temporal, decomposition=decomposition)
+        **side_budgets(scene, result, stability, reference, hits=frame.hits,
+                       geometry=runner.geometry),
+        claim_verdicts=verdicts, temporal=temporal, decomposition=decomposition))
 
 
 def _decomposition(runner: RealtimeRunner, reference, metrics, options: CompareOptions):
@@ -373,14 +398,5 @@ def _decomposition(runner: RealtimeRunner, reference, metrics, options: CompareO
     finally:
         if bar is not None:
             bar.close()
-
-
-def _claims(convergence) -> dict[str, str]:
-    rows = [r for r in convergence.records()
-            if r["estimator"] == "modified" and not r["safeguarded"]]
-    five = check_five_iterations({r["iteration"]: r["p95_error_texels"] for r in rows})[1]
-    one = check_one_iteration({r["iteration"]: r["relmse"] for r in rows})[1]
-    return {"error negligible after five iterations (modified estimator)": five,
-            "one iteration is enough for rendering (modified estimator)": one}
 
 

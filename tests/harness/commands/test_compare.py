@@ -52,8 +52,12 @@ def test_compare_writes_everything_and_reuses_the_cache(tmp_path, capsys):
               == ("receiver0", "caustic", "relmse")]
     assert len(relmse) == 1 and relmse[0]["value"] > 0 and relmse[0]["noise_floor"] > 0
     assert {m["view"] for m in data["metrics"]} == {"camera", "receiver0"}
+    # The object seen through is a camera region of its own, scored.
+    assert {m["region"] for m in data["metrics"] if m["view"] == "camera"} == {
+        "full", "object", "object_masked"}
     assert len(data["claims"]) == 2
-    assert all(text.startswith(("holds", "does not hold", "not measured"))
+    assert all(text.startswith(("holds", "does not hold", "undecided at this noise",
+                                "not measured"))
                for text in data["claims"].values())
     assert "caustic_map" in data["provenance"]["caustics_mapping"]["passes"]
     assert data["provenance"]["reference"]["event_chains"]
