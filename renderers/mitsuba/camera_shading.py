@@ -72,12 +72,10 @@ import math
 
 from renderers.mitsuba import _mi
 from renderers.mitsuba.camera_lookup import bilinear
-from scenes.model import ConductorMaterial, DielectricMaterial, DiffuseMaterial
+from renderers.mitsuba.specular import CONDUCTOR, DIELECTRIC, interface
+from scenes.model import DiffuseMaterial
 
 __all__ = ["CameraEvent", "camera_event", "receiver_radiance"]
-
-#: Material kinds per lane (as :mod:`.specular`): diffuse, dielectric, conductor.
-ABSORB, DIELECTRIC, CONDUCTOR = 0, 1, 2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -131,35 +129,11 @@ def camera_event(si, ray, weight, sigma, *, hit, object_ids, objects, channel,
         One uniform number per lane; needed only in all-paths mode with Fresnel.
     """
     mi, dr, _ = _mi.load()
-    sid = dr.reinterpret_array(mi.UInt32, si.shape)
-    kind = mi.UInt32(ABSORB)
-    eta = mi.Float(1.0)
-    obj_sigma = mi.Color3f(0.0)
-    refl = mi.Color3f(1.0)
-    fres = mi.Bool(False)
-    for oid, obj in zip(object_ids, objects, strict=True):
-        m = obj.material
-        here = sid == oid
-        if isinstance(m, DielectricMaterial):
-            kind = dr.select(here, DIELECTRIC, kind)
-            eta = dr.select(here, float(m.iors[0 if channel is None else channel]), eta)
-            obj_sigma = dr.select(here, mi.Color3f(*map(float, m.absorption)), obj_sigma)
-            fres = dr.select(here, bool(m.fresnel), fres)
-        elif isinstance(m, ConductorMaterial):
-            kind = dr.select(here, CONDUCTOR, kind)
-            refl = dr.select(here, mi.Color3f(*map(float, m.reflectance)), refl)
-    going_on = hit & (kind != ABSORB)
-    d = ray.d
-    n = si.sh_frame.n
-    entering = dr.dot(d, si.n) < 0  # geometric normal: which side the ray comes from
-    nf = dr.select(dr.dot(d, n) < 0, n, -n)  # shading normal facing the ray's origin
-    cos_i = dr.clip(-dr.dot(d, nf), 0.0, 1.0)
-    rel = dr.select(entering, dr.rcp(eta), eta)  # n1 / n2 along the camera ray
-    k = 1.0 - rel * rel * (1.0 - cos_i * cos_i)
-    tir = k < 0
-    t_dir = dr.normalize(rel * d + (rel * cos_i - dr.sqrt(dr.maximum(k, 0.0))) * nf)
-    r_dir = dr.normalize(d + 2.0 * cos_i * nf)
-    f, _, _, _ = mi.fresnel(dr.select(entering, cos_i, -cos_i), eta)
+    face = interface(si, ray, hit=hit, object_ids=object_ids, objects=objects, channel=channel)
+    kind, obj_sigma, refl, fres = face.kind, face.sigma, face.reflectance, face.fresnel
+    going_on, entering, rel = face.going_on, face.entering, face.relative_eta
+    tir, t_dir, r_dir, f = (face.tir, face.transmitted, face.reflected,
+                            face.fresnel_reflectance)
     dielectric = kind == DIELECTRIC
     if all_paths:
         # Fresnel: sample the branch (reflect with probability F, weight one);

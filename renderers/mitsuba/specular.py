@@ -14,7 +14,7 @@ import dataclasses
 from renderers.mitsuba import _mi
 from scenes.model import ConductorMaterial, DielectricMaterial
 
-__all__ = ["Event", "specular_event"]
+__all__ = ["Event", "Interface", "interface", "specular_event"]
 
 #: Material kinds per lane: a diffuse object absorbs, the others scatter.
 ABSORB, DIELECTRIC, CONDUCTOR = 0, 1, 2
@@ -65,6 +65,88 @@ class Event:
     dielectric_reflection: object = None
 
 
+@dataclasses.dataclass(frozen=True)
+class Interface:
+    """What rays meet at a surface: the material per lane and the refraction geometry
+    (Dr.Jit arrays; shared by the photon tracer's and the camera tracer's events).
+
+    Attributes
+    ----------
+    kind : mi.UInt32
+        ABSORB, DIELECTRIC or CONDUCTOR.
+    eta, sigma, reflectance, fresnel
+        The dielectric's IOR (this channel's) and absorption coefficient (1/m), the
+        conductor's reflectance, and whether the material asks for Fresnel.
+    going_on : mi.Bool
+        Lanes that hit a specular object (they scatter on).
+    normal, facing : mi.Vector3f
+        The shading normal, and it turned to face the ray's origin.
+    entering : mi.Bool
+        The ray arrives from the geometric normal's side (it enters the object).
+    cos_i, relative_eta : mi.Float
+        Cosine of incidence at ``facing``, and n1 / n2 along the ray.
+    tir : mi.Bool
+        Total internal reflection (no transmitted direction).
+    transmitted, reflected : mi.Vector3f
+        Snell's refracted direction (meaningless under TIR) and the mirror direction.
+    fresnel_reflectance : mi.Float
+        Unpolarised Fresnel reflectance F.
+    """
+
+    kind: object
+    eta: object
+    sigma: object
+    reflectance: object
+    fresnel: object
+    going_on: object
+    normal: object
+    facing: object
+    entering: object
+    cos_i: object
+    relative_eta: object
+    tir: object
+    transmitted: object
+    reflected: object
+    fresnel_reflectance: object
+
+
+def interface(si, ray, *, hit, object_ids, objects, channel) -> Interface:
+    """The :class:`Interface` of the rays ``ray`` (unit directions) at ``si``; ``hit``,
+    ``object_ids``, ``objects`` and ``channel`` as in :func:`specular_event`."""
+    mi, dr, _ = _mi.load()
+    sid = dr.reinterpret_array(mi.UInt32, si.shape)
+    kind = mi.UInt32(ABSORB)
+    eta = mi.Float(1.0)
+    obj_sigma = mi.Color3f(0.0)
+    refl = mi.Color3f(1.0)
+    fres = mi.Bool(False)
+    for oid, obj in zip(object_ids, objects, strict=True):
+        m = obj.material
+        here = sid == oid
+        if isinstance(m, DielectricMaterial):
+            kind = dr.select(here, DIELECTRIC, kind)
+            eta = dr.select(here, float(m.iors[0 if channel is None else channel]), eta)
+            obj_sigma = dr.select(here, mi.Color3f(*map(float, m.absorption)), obj_sigma)
+            fres = dr.select(here, bool(m.fresnel), fres)
+        elif isinstance(m, ConductorMaterial):
+            kind = dr.select(here, CONDUCTOR, kind)
+            refl = dr.select(here, mi.Color3f(*map(float, m.reflectance)), refl)
+    d = ray.d
+    n = si.sh_frame.n
+    entering = dr.dot(d, si.n) < 0  # geometric normal: which side we come from
+    nf = dr.select(dr.dot(d, n) < 0, n, -n)  # shading normal facing d's origin
+    cos_i = dr.clip(-dr.dot(d, nf), 0.0, 1.0)
+    rel = dr.select(entering, dr.rcp(eta), eta)  # n1 / n2
+    k = 1.0 - rel * rel * (1.0 - cos_i * cos_i)
+    t_dir = dr.normalize(rel * d + (rel * cos_i - dr.sqrt(dr.maximum(k, 0.0))) * nf)
+    r_dir = dr.normalize(d + 2.0 * cos_i * nf)
+    f, _, _, _ = mi.fresnel(dr.select(entering, cos_i, -cos_i), eta)
+    return Interface(kind=kind, eta=eta, sigma=obj_sigma, reflectance=refl, fresnel=fres,
+                     going_on=hit & (kind != ABSORB), normal=n, facing=nf, entering=entering,
+                     cos_i=cos_i, relative_eta=rel, tir=k < 0, transmitted=t_dir,
+                     reflected=r_dir, fresnel_reflectance=f)
+
+
 def specular_event(si, ray, weight, sigma, rng, *, hit, object_ids, objects, channel,
                    all_paths: bool, shading_correction: bool) -> Event:
     """Scatter the photons of ``hit`` at ``si``; others pass through unchanged.
@@ -94,35 +176,11 @@ def specular_event(si, ray, weight, sigma, rng, *, hit, object_ids, objects, cha
         Apply the adjoint shading-normal factor.
     """
     mi, dr, _ = _mi.load()
-    sid = dr.reinterpret_array(mi.UInt32, si.shape)
-    kind = mi.UInt32(ABSORB)
-    eta = mi.Float(1.0)
-    obj_sigma = mi.Color3f(0.0)
-    refl = mi.Color3f(1.0)
-    fres = mi.Bool(False)
-    for oid, obj in zip(object_ids, objects, strict=True):
-        m = obj.material
-        here = sid == oid
-        if isinstance(m, DielectricMaterial):
-            kind = dr.select(here, DIELECTRIC, kind)
-            eta = dr.select(here, float(m.iors[0 if channel is None else channel]), eta)
-            obj_sigma = dr.select(here, mi.Color3f(*map(float, m.absorption)), obj_sigma)
-            fres = dr.select(here, bool(m.fresnel), fres)
-        elif isinstance(m, ConductorMaterial):
-            kind = dr.select(here, CONDUCTOR, kind)
-            refl = dr.select(here, mi.Color3f(*map(float, m.reflectance)), refl)
-    going_on = hit & (kind != ABSORB)
-    d = ray.d
-    n = si.sh_frame.n
-    entering = dr.dot(d, si.n) < 0  # geometric normal: which side we come from
-    nf = dr.select(dr.dot(d, n) < 0, n, -n)  # shading normal facing d's origin
-    cos_i = dr.clip(-dr.dot(d, nf), 0.0, 1.0)
-    rel = dr.select(entering, dr.rcp(eta), eta)  # n1 / n2
-    k = 1.0 - rel * rel * (1.0 - cos_i * cos_i)
-    tir = k < 0
-    t_dir = dr.normalize(rel * d + (rel * cos_i - dr.sqrt(dr.maximum(k, 0.0))) * nf)
-    r_dir = dr.normalize(d + 2.0 * cos_i * nf)
-    f, _, _, _ = mi.fresnel(dr.select(entering, cos_i, -cos_i), eta)
+    face = interface(si, ray, hit=hit, object_ids=object_ids, objects=objects, channel=channel)
+    kind, obj_sigma, refl, fres = face.kind, face.sigma, face.reflectance, face.fresnel
+    going_on, d, n, entering = face.going_on, ray.d, face.normal, face.entering
+    tir, t_dir, r_dir, f = (face.tir, face.transmitted, face.reflected,
+                            face.fresnel_reflectance)
     u = rng.next_float32()
     dielectric = kind == DIELECTRIC
     reflect = dr.select(fres, u < f, tir & all_paths)
