@@ -504,7 +504,9 @@ class Settings:
     photons: int = spec(
         2_000_000, doc="Photon budget of the reference photon tracer per seed.", ge=1
     )
-    spp: int = spec(64, doc="Particle-tracer samples per pixel per seed.", ge=1)
+    spp: int = spec(16, doc="Reference camera samples per pixel per seed (camera tracer: "
+                     "stratified subpixel samples, 4 x 4 by default; ptracer: particles per "
+                     "pixel).", ge=1)
     seed: int = spec(0, doc="First random seed.", ge=0)
     seeds: int = spec(4, doc="Independent seeds K for the reference's variance.", ge=1, le=64)
     target_noise: float = spec(

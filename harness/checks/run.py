@@ -3,7 +3,8 @@ them, with the same functions the test suite uses.
 
 * **Physical requirements** on this run: the method's outputs against this run's
   reference (finite, energy, flux agreement, no TIR in a sphere) and, where the
-  ideal-sphere answer describes the scene, the reference against it. Any scene.
+  ideal-sphere answer describes the scene, the reference against it (its receiver
+  maps, and its camera's lens image: :mod:`harness.checks.camera`). Any scene.
 * **Method targets**: this run's measures, for a committed scene run without setting
   overrides (the targets hold at the scene's own settings).
 * **Regression locks**: the method re-rendered at the golden settings against the
@@ -22,6 +23,7 @@ import numpy as np
 
 from harness.checks import GAPS_FILE, TARGETS_FILE
 from harness.checks.bounds import Bound, Gap, Target, load_gaps, load_locks, load_targets
+from harness.checks.camera import camera_measures, camera_requirements, exact_camera
 from harness.checks.golden import GOLDEN_SETTINGS, load_golden
 from harness.checks.locks import (
     LOCKED_METHODS,
@@ -121,6 +123,10 @@ def comparison_checks(scene: Scene, method: str, comparison: SceneComparison,
         not_applied["physical requirement (method)"] = "no stability summary"
     if all(m.variance is not None for m in reference_maps):
         checks += reference_requirements(scene, geometry, reference_maps)
+    has_camera = "camera/method" in comparison.images and "camera/reference" in comparison.images
+    exact = exact_camera(scene, reference_maps) if has_camera else None
+    if exact is not None:
+        checks += camera_requirements(exact, comparison.images["camera/reference"])
     checks = apply_gaps(checks, files.gaps, scene=scene.name, method=method)
 
     why = not_committed(scene, scenes_dir)
@@ -130,6 +136,8 @@ def comparison_checks(scene: Scene, method: str, comparison: SceneComparison,
         status = (comparison.provenance.get("caustics_mapping") or {}).get("status_counts")
         measures = target_measures(reference_maps[0], method_maps[0], stability=stability,
                                    status_counts=status)
+        if exact is not None:
+            measures.update(camera_measures(exact, comparison.images["camera/method"]))
         checks += check_targets(files.targets, scene=scene.name, method=method,
                                 measures=measures)
     else:

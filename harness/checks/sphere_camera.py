@@ -1,5 +1,6 @@
-"""An exact camera image of a dielectric sphere over a plane, for the camera tests
-of both renderers (issue 15's "exact analytic check").
+"""An exact camera image of a dielectric sphere over a plane, for the camera checks
+of both renderers (the camera requirements and targets of ``compare``, and the
+renderers' camera tests).
 
 Everything is closed-form ray geometry, written here and independent of both
 renderers' code: primary rays through stratified subpixel positions, ray–sphere

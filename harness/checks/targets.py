@@ -23,6 +23,9 @@ Measures (:data:`MEASURES`), each of the receiver map named by the target's ``vi
     vertices whose exact ray meets no receiver (``harness.checks.stability``).
 ``object_vertices``
     Grid vertices that traced an object (every status but ``empty``).
+``camera_black_fraction_difference``, ``camera_object_radiance_ratio``
+    The camera over a sphere against its exact lens image (view ``camera``;
+    :mod:`harness.checks.camera`).
 """
 
 from __future__ import annotations
@@ -49,6 +52,10 @@ MEASURES = {
     "tir_flux_fraction": "share of the traced flux lost to total internal reflection",
     "off_receiver_flux_fraction": "share of the traced flux splatted off every receiver",
     "object_vertices": "grid vertices that traced an object",
+    "camera_black_fraction_difference":
+        "|black fraction of the camera over the sphere − the exact lens image's|",
+    "camera_object_radiance_ratio":
+        "mean luminance over the sphere, camera / exact lens image",
 }
 
 

@@ -91,7 +91,7 @@ class ReferenceTable:
         None, doc="Independent seeds K, one task each (the variance needs two or more).",
         ge=1, le=64)
     seed: int | None = spec(None, doc="First seed.", ge=0)
-    spp: int | None = spec(None, doc="Camera (ptracer) samples per pixel per seed.", ge=1)
+    spp: int | None = spec(None, doc="Reference camera samples per pixel per seed.", ge=1)
     target_noise: float | None = spec(
         None, doc="Stop at this relative noise (checked after each round of 2^20 photons "
         "per seed, as in a single-process reference).", gt=0)

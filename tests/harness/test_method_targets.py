@@ -19,6 +19,10 @@ TIR / off-receiver flux          0 / 0               1.15 % / 0.95 %
 dispersion flux per channel      0.997 0.994 0.990   1.033 1.055 1.090
 bunny relMSE                     0.12                0.48
 bunny vertices on the object     9,813               4,753
+camera black fraction, |Δ| vs    0.0031              0.027
+  exact (glass_sphere, 512²)
+camera mean radiance / exact     0.9999              1.061
+dispersion camera black |Δ|      0.0030              0.27 (known gap)
 ===============================  ==================  ==================
 """
 
@@ -28,6 +32,7 @@ import pytest
 
 from harness.checks import TARGETS_FILE
 from harness.checks.bounds import holds, load_targets
+from harness.checks.camera import camera_measures, exact_camera
 from harness.checks.stability import stability_summary
 from harness.checks.targets import check_targets, target_measures
 from renderers.caustics_mapping import render_frame
@@ -68,6 +73,9 @@ def measures(tmp_path_factory, context_factory):
             out[(name, method)] = target_measures(
                 references[name].receivers[0], frame.result.receivers[0],
                 stability=stability, status_counts=frame.result.metadata["status_counts"])
+            exact = exact_camera(scene, references[name].receivers)
+            if exact is not None:
+                out[(name, method)].update(camera_measures(exact, frame.result.camera))
         return out[(name, method)]
 
     return get

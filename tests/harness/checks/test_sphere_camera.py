@@ -1,5 +1,6 @@
-"""The exact sphere camera (``sphere_camera.py``) that both renderers' camera tests
-trust: its geometry checked against closed forms before anything is compared with it."""
+"""The exact sphere camera (``harness/checks/sphere_camera.py``) that both renderers'
+camera tests and the camera checks of ``compare`` trust: its geometry checked against
+closed forms before anything is compared with it."""
 
 from __future__ import annotations
 
@@ -9,10 +10,10 @@ import math
 import numpy as np
 import pytest
 
+from harness.checks import sphere_camera
+from harness.checks.sphere_camera import analytic_sphere_camera
 from scenes.loader import load_scene
 from scenes.model import DielectricMaterial
-from tests.renderers import sphere_camera
-from tests.renderers.sphere_camera import analytic_sphere_camera
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
 

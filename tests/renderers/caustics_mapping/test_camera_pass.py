@@ -3,7 +3,7 @@ refraction through the camera-view back faces (Wyman 2005), the receiver hit fro
 the light's positions atlas, TIR, Fresnel, absorption, dispersion and reflection.
 
 Every accuracy check here is a **method target**: what a preset should reach against
-an exact answer, the analytic sphere camera of ``tests/renderers/sphere_camera.py``
+an exact answer, the analytic sphere camera of ``harness/checks/sphere_camera.py``
 or an exact trace of the same triangles on Mitsuba's ray tracer
 (:mod:`harness.raycast`); a miss of the paper preset is a known gap (strict xfail
 with the measured numbers). The exact answers are shaded with the method's
@@ -20,12 +20,12 @@ import dataclasses
 import numpy as np
 import pytest
 
+from harness.checks import sphere_camera
+from harness.checks.sphere_camera import analytic_sphere_camera, black_fraction, luminance
 from renderers.caustics_mapping import render
 from scenes import load_scene, with_settings
 from scenes.model import DielectricMaterial
 from tests.conftest import SCENES
-from tests.renderers import sphere_camera
-from tests.renderers.sphere_camera import analytic_sphere_camera, black_fraction, luminance
 
 #: Camera resolution of these checks: the sphere covers 848 interior pixels.
 CAMERA = (128, 128)

@@ -28,6 +28,12 @@ import pytest
 from scipy import stats
 from scipy.ndimage import binary_dilation
 
+from harness.checks.sphere_camera import (
+    BLACK_LEVEL,
+    analytic_sphere_camera,
+    black_fraction,
+    luminance,
+)
 from renderers.exr import write_exr
 from renderers.mitsuba.camera import render_camera
 from renderers.mitsuba.camera_trace import CameraTracer, render_traced_camera
@@ -35,12 +41,6 @@ from renderers.mitsuba.noise import seed_statistics
 from renderers.mitsuba.reference import estimate_receivers
 from scenes import load_scene
 from scenes.model import DielectricMaterial
-from tests.renderers.sphere_camera import (
-    BLACK_LEVEL,
-    analytic_sphere_camera,
-    black_fraction,
-    luminance,
-)
 
 SCENES = Path(__file__).resolve().parents[3] / "scenes"
 ALPHA = 0.01  # family-wise false-alarm rate of the per-pixel Welch tests
@@ -104,7 +104,7 @@ def test_floor_seen_directly_matches_ptracer(tmp_path, record_property):
     where ptracer is right (light L D E and caustic L T T D E paths, connected to the
     pinhole), the camera tracer agrees with it per pixel within the two renders'
     noise. Pixels: every subpixel ray of the exact sphere camera
-    (tests/renderers/sphere_camera.py) sees the floor, at least 2 pixels from the
+    (harness/checks/sphere_camera.py) sees the floor, at least 2 pixels from the
     sphere's silhouette (the icosphere's outline differs from the ideal sphere's by
     under a pixel) and from the shadow's edge.
 
@@ -169,7 +169,7 @@ def test_sphere_shows_the_refracted_floor_and_caustic(fresnel, tmp_path, record_
     """Physical requirement, glass_sphere (96^2 camera), as given and with the
     ``fresnel`` effect: seen through the sphere, the camera shows the floor by two
     refractions, with the caustic, as the exact ray geometry of
-    tests/renderers/sphere_camera.py does (ideal sphere, the same caustic map looked
+    harness/checks/sphere_camera.py does (ideal sphere, the same caustic map looked
     up bilinearly, 4 x 4 stratum centres per pixel; with Fresnel each interface
     transmits 1 - F, the chain the photon tracer counts).
 
@@ -213,7 +213,7 @@ def test_sphere_shows_the_refracted_floor_and_caustic(fresnel, tmp_path, record_
 def _pinhole(camera, fx, fy):
     """Unit directions (..., 3) of the scene camera's rays through film positions
     (fx, fy) in pixels (0 at the left / top edge): the perspective model of
-    tests/renderers/sphere_camera.py (Mitsuba's ``perspective`` sensor)."""
+    harness/checks/sphere_camera.py (Mitsuba's ``perspective`` sensor)."""
     width, height = camera.resolution
     eye = np.asarray(camera.position, float)
     forward = np.asarray(camera.look_at, float) - eye
@@ -376,7 +376,7 @@ def _interior_means(image, mask):
 def test_dispersion_refracts_each_channel_with_its_own_ior(tmp_path, record_property):
     """Physical requirement, dispersion_sphere (IOR 1.45 / 1.52 / 1.62, 96^2 camera):
     through the sphere each channel shows the floor refracted with its own IOR.
-    Against the exact camera (tests/renderers/sphere_camera.py, per-channel
+    Against the exact camera (harness/checks/sphere_camera.py, per-channel
     refraction, the same caustic map): (1) each channel's mean radiance over the
     sphere's interior within 1 % of the exact one (measured 0.2 %; glass_sphere's
     grey check agrees to 0.3 %, see test_sphere_shows_the_refracted_floor_and_caustic);
@@ -560,7 +560,7 @@ def test_footprints_are_the_pinholes_on_the_floor():
     centre ray and its right and lower neighbours' all see the floor directly, the
     ideal footprint sqrt|du_x dv_y - dv_x du_y| from the three rays' floor hits,
     computed here with exact ray-plane geometry (and the perspective model of
-    tests/renderers/sphere_camera.py), matches ``CameraTracer.footprints`` within
+    harness/checks/sphere_camera.py), matches ``CameraTracer.footprints`` within
     1e-3 relative (float32 hit points about 10 m away, differences of 3 to 9 cm)."""
     scene = _scene("glass_sphere", 128)
     (measured,) = CameraTracer(scene).footprints()
