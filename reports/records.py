@@ -10,7 +10,8 @@ Image naming: ``images`` keys are ``"<view>/<kind>"`` where view is ``camera`` o
 
 * ``method``       caustics-mapping image, linear float32 (H, W, 3)
 * ``reference``  Mitsuba mean, linear float32 (H, W, 3)
-* ``reference_variance``  receivers only: variance of that mean, float32 (H, W, 3)
+* ``reference_variance``  variance of that mean (receivers, and the camera when it
+  is compared), float32 (H, W, 3)
 * ``signed``     method − reference, float (H, W, 3)
 * ``ssim``       SSIM map of the tone-mapped images, float (H, W) in [-1, 1]
 * ``flip``       HDR-FLIP map, float (H, W) in [0, 1]

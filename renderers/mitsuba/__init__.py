@@ -10,14 +10,19 @@ Public entry points
     -> :class:`renderers.results.RenderResult` (cached, K seeds, noise-targeted).
 ``trace_receiver_maps(scene, *, photons, seed, ...)``
     -> one seed of the event-filtered photon tracer.
+``render_traced_camera(scene, *, photons, ...)``
+    -> the camera tracer's K-seed image (sees through glass and water; the default
+    reference camera).
 ``render_camera(scene, *, spp, seed, ...)``
-    -> one seed of the ptracer camera image.
+    -> one seed of the ptracer camera image (``--camera ptracer``).
 """
 
 from __future__ import annotations
 
 from renderers.mitsuba.camera import render_camera
+from renderers.mitsuba.camera_trace import render_traced_camera
 from renderers.mitsuba.photons import event_chains_counted, trace_receiver_maps
 from renderers.mitsuba.reference import render_reference
 
-__all__ = ["event_chains_counted", "render_camera", "render_reference", "trace_receiver_maps"]
+__all__ = ["event_chains_counted", "render_camera", "render_reference", "render_traced_camera",
+           "trace_receiver_maps"]
