@@ -16,7 +16,8 @@ Image naming: ``images`` keys are ``"<view>/<kind>"`` where view is ``camera`` o
 * ``ssim``       SSIM map of the tone-mapped images, float (H, W) in [-1, 1]
 * ``flip``       HDR-FLIP map, float (H, W) in [0, 1]
 * ``mask_caustic``  bool (H, W): the caustic region (reference above its threshold)
-* ``mask_object``   bool (H, W), camera only: pixels of the caustic object (excluded)
+* ``mask_object``   bool (H, W), camera only: pixels of the caustic object and its
+  silhouette (excluded from ``object_masked``; the ``object`` region is its interior)
 
 Receiver maps are stored with row 0 at vmin (``renderers.results``); flip them
 vertically for display so +v points up.

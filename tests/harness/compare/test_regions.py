@@ -66,3 +66,32 @@ def test_blind_reference_camera_is_detected():
     sparse = rng.poisson(0.4, (32, 32, 1)).repeat(3, axis=2) / 0.4   # 67 % black
     assert _camera_is_blind(stray, method)
     assert not _camera_is_blind(sparse, method)
+
+
+def test_water_pool_camera_is_scored_against_the_camera_tracer():
+    """Issue 15: every scene gets a camera comparison. On water_pool the floor is seen
+    only through the water, which a ptracer reference renders black, so with ptracer
+    the camera is left out with a note; the camera tracer's reference is compared,
+    with the object region (the water surface seen through) scored."""
+    from harness.compare.pipeline import _views  # noqa: PLC0415 - private, this test only
+    from renderers.results import ReceiverMap, RenderResult  # noqa: PLC0415
+
+    scene = load_scene(SCENES / "water_pool.toml")
+    scene = dataclasses.replace(scene, camera=dataclasses.replace(scene.camera,
+                                                                  resolution=(48, 36)))
+    geometry = build_geometry(scene)
+    maps = tuple(ReceiverMap(np.ones((8, 8, 3), np.float32), r.extent)
+                 for r in geometry.receivers)
+    lit = np.ones((36, 48, 3), np.float32)
+
+    def result(camera, integrator):
+        return RenderResult("x", camera, maps, (), metadata={"camera_integrator": integrator})
+
+    method = result(lit, None)
+    views, note = _views(scene, geometry, method, result(np.zeros_like(lit), "ptracer"),
+                         result(np.zeros_like(lit), "ptracer"))
+    assert note and "camera" not in [v.name for v in views]
+    views, note = _views(scene, geometry, method, result(lit, "camera_trace"),
+                         result(lit, "camera_trace"))
+    (camera,) = [v for v in views if v.name == "camera"]
+    assert note is None and camera.regions["object"].sum() > 100
