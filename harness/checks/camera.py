@@ -26,6 +26,8 @@ Method target measures (``data/method_targets.toml``):
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from harness.checks.analytic import not_applicable
@@ -42,11 +44,16 @@ __all__ = ["LENS_BOUND", "camera_measures", "camera_requirements", "exact_camera
 LENS_BOUND = 0.05
 
 
-def exact_camera(scene: Scene, reference_maps) -> SphereCamera | None:
-    """The exact camera image at the scene camera's resolution, shaded with the
-    reference's caustic map of receiver 0; None where it does not describe ``scene``."""
+def exact_camera(scene: Scene, reference_maps, *,
+                 resolution: tuple[int, int] | None = None) -> SphereCamera | None:
+    """The exact camera image, shaded with the reference's caustic map of receiver 0,
+    at ``resolution`` (W, H; default the scene camera's: give the compared images'
+    own size); None where it does not describe ``scene``."""
     if not_applicable(scene) is not None or len(scene.receivers) != 1:
         return None
+    if resolution is not None and tuple(resolution) != tuple(scene.camera.resolution):
+        scene = dataclasses.replace(scene, camera=dataclasses.replace(
+            scene.camera, resolution=tuple(int(x) for x in resolution)))
     return analytic_sphere_camera(scene, reference_maps[0], supersample=2)
 
 

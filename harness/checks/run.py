@@ -123,8 +123,13 @@ def comparison_checks(scene: Scene, method: str, comparison: SceneComparison,
         not_applied["physical requirement (method)"] = "no stability summary"
     if all(m.variance is not None for m in reference_maps):
         checks += reference_requirements(scene, geometry, reference_maps)
-    has_camera = "camera/method" in comparison.images and "camera/reference" in comparison.images
-    exact = exact_camera(scene, reference_maps) if has_camera else None
+    # As for the maps: the reference's checks run on a real reference (with variance).
+    has_camera = ("camera/method" in comparison.images and "camera/reference" in
+                  comparison.images and all(m.variance is not None for m in reference_maps))
+    exact = None
+    if has_camera:
+        height, width = np.shape(comparison.images["camera/reference"])[:2]
+        exact = exact_camera(scene, reference_maps, resolution=(width, height))
     if exact is not None:
         checks += camera_requirements(exact, comparison.images["camera/reference"])
     checks = apply_gaps(checks, files.gaps, scene=scene.name, method=method)

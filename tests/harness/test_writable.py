@@ -115,7 +115,7 @@ def test_reference_command_renders_without_an_unwritable_cache(tmp_path, capsys,
 
     seen = {}
 
-    def fake_render(scene, *, cache, use_cache, progress):
+    def fake_render(scene, *, cache, use_cache, progress, camera):
         seen["use_cache"] = use_cache
         raise KeyboardInterrupt  # stop before writing: the decision is what we check
 

@@ -87,7 +87,11 @@ def test_estimates_are_finite_and_statuses_valid(*, spec, samples, estimator, sa
     """Any receiver, any ray, any estimator: finite history, a valid status; the
     safeguarded forms never go behind the ray origin, and never diverge or oscillate
     judged from the history of their estimates against the exact distance (not from
-    the status they assign themselves, which is never DIVERGED when safeguarded)."""
+    the status they assign themselves, which is never DIVERGED when safeguarded).
+    With zero iterations the history is the start estimate alone (the distance to the
+    receiver's plane along the ray, no step of the estimator taken), which can exceed
+    10x a tiny exact distance: there is no iterate to judge, so only the history's
+    finiteness is checked (hypothesis found such a ray at iterations=0, eps=0.0625)."""
     v, r = _rays(samples)
     result = estimate_distances(_atlas(_height(spec)), v, r, estimator=estimator,
                                 iterations=iterations, eps=eps, safeguarded=safeguarded)
@@ -96,6 +100,7 @@ def test_estimates_are_finite_and_statuses_valid(*, spec, samples, estimator, sa
     assert set(np.unique(result.status)) <= {HIT, LOST, DIVERGED}
     if safeguarded:
         assert np.all(result.distance >= 0)
+    if safeguarded and iterations > 0:
         outcomes = _outcomes(spec, v, r, result)
         assert not np.any(np.isin(outcomes, ["diverged", "oscillating"])), outcomes
 
