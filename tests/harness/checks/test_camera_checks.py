@@ -43,13 +43,12 @@ def test_a_black_sphere_fails_the_lens_image(sphere):
 def test_a_uniform_grey_ball_misses_the_method_targets(sphere):
     """The old single refraction to a plane drew a uniform grey ball (1.5 % black):
     filling the sphere with its mean radiance misses the black fraction by over the
-    0.08 target, while the exact image itself is 0 off and its mean ratio 1."""
+    0.08 target."""
     _, exact = sphere
     grey = exact.image.copy()
     grey[exact.sphere] = exact.image[exact.interior].mean(axis=0)
     measures = camera_measures(exact, grey)
     assert measures["camera_black_fraction_difference"] > 0.4
-    assert abs(measures["camera_object_radiance_ratio"] - 1) < 0.05  # same mean radiance
     assert luminance(grey)[exact.interior].min() > 0
 
 
