@@ -239,14 +239,14 @@ float projection_distance(int surface, vec3 x) {
 
 // The preset's estimate of d along v + d r on `surface`, from d_1 = `start` (< 0:
 // g(0)): the safeguarded secant as the bracketed secant on the signed depth, every
-// other estimator as the caustic trace runs it (surface_estimate.glsl). `d_seen`:
+// other estimator as the caustic trace runs it (estimators.glsl). `d_seen`:
 // the last estimate whose lookup saw the surface (-1: not tracked or none).
 int estimate_ray(int surface, vec3 v, vec3 r, float start, out float d, out float d_seen) {
 #if ESTIMATOR == 2 && SAFEGUARDED == 1
     d_seen = -1.0;
     return bracket_on(surface, v, r, start, d);
 #else
-    return estimate_on(surface, v, r, start, d, d_seen);
+    return estimate_along(surface, v, r, start, ESTIMATOR, SAFEGUARDED == 1, 0, d, d_seen);
 #endif
 }
 
@@ -292,7 +292,7 @@ vec3 receiver_along(vec3 v, vec3 r, out float dist) {
     float d, d_seen;
     int status = estimate_ray(SURFACE_RECEIVERS, v, r, u_start == 1 ? u_start_distance : -1.0,
                               d, d_seen);
-    if (status != ESTIMATE_HIT || !(d > 0.0 && d < 1e30)) return vec3(0.0);
+    if (status != STATUS_HIT || !(d > 0.0 && d < 1e30)) return vec3(0.0);
     vec3 p = v + d * r;
     vec4 t;
     vec3 n;

@@ -16,27 +16,17 @@
 // 0, 1, ..., u_iterations updates (entry 0 is the start d_1 = g(0)); after a
 // lost lookup or a divergence the last estimate is repeated.
 //
-// Estimators, with P(d) = v + d r, T(x) the receiver position at x's light-space
-// projection, g(d) = |T(P(d)) - v|, h(d) = g(d) - d:
-//   modified (paper):     d <- g(d)
-//   newton (appendix):    f(d) = |T(P(d)) - P(d)|, d <- d - f(d) eps / (f(d+eps) - f(d))
-//   secant (distance impostors): d <- d - h(d) (d - d_prev) / (h(d) - h(d_prev))
-// starting from d_0 = 0, d_1 = g(0) (the receiver seen along the light ray;
-// u_start = 0) or from d_1 = u_start_distance (u_start = 1, the appendix listing's
-// start; secant's first update is then the modified one, having no previous point).
-// T is read nearest-texel or bilinear within one receiver (u_filtered, common.glsl);
-// the exit surface likewise, at its own resolution u_back_size.
+// The estimators (estimators.glsl) find where the ray v + d r meets the receivers
+// in the receiver positions atlas: T(x), the receiver position at x's light-space
+// projection, is read nearest-texel or bilinear within one receiver (u_filtered,
+// common.glsl); the exit surface likewise, at its own resolution u_back_size.
+// u_start = 0 starts from d_1 = g(0) (the receiver seen along the light ray through
+// the vertex), u_start = 1 from d_1 = u_start_distance (the appendix listing's start).
 // Verified hits (u_verify): the final estimate P is accepted only if a receiver is
 // seen at P and |T(P) - P| <= tolerance (u_hit_tolerance, or one positions-map texel
 // at P's distance over |cos| between the light ray and the receiver normal, the
 // cosine clamped at 0.1); otherwise the status is STATUS_UNCONVERGED and the vertex
 // is splatted only with u_splat_unconverged.
-// Safeguarded: a bracket [lo, hi] with h(lo) >= 0 >= h(hi) is kept from every
-// lookup (an estimate whose lookup sees no receiver is taken as an upper end, and
-// the next estimate is halfway back to the last one that saw a receiver); an update that is non-finite, leaves the bracket, or oscillates (reverses
-// direction without at least halving the step, from the last two estimates) is
-// replaced by bisection of the bracket (or by the modified step while no upper end
-// is known).
 #include "common.glsl"
 
 layout(std430, binding = 0) writeonly buffer Records { vec4 records[]; };
@@ -72,8 +62,6 @@ uniform int u_paper;            // 1: the paper's Eq. 6 flux, (N.L) / V
 uniform float u_covered;        // V, grid texels covered (occlusion query)
 uniform int u_estimator;        // 0 modified, 1 newton, 2 secant
 uniform int u_safeguarded;
-uniform int u_iterations;
-uniform float u_eps;            // Newton's finite-difference step (m)
 uniform int u_exit_iterations;  // refinements of the exit point (double refraction)
 
 const int STATUS_NO_EXIT = 5;   // double refraction found no exit surface
@@ -116,14 +104,18 @@ vec3 receiver_normal_at(vec3 x) {
     return dot(n, n) > 0.0 ? normalize(n) : n;
 }
 
-bool lookup_g(vec3 v, vec3 r, float d, out float g, out vec3 t) {
-    vec4 q;
+// The estimators' surface 0 is the receiver positions atlas; each update's estimate
+// goes to the vertex's history (its first float at `record`).
+bool surface_at(int surface, vec3 x, out vec4 t) {
     ivec2 texel;
-    bool ok = receiver_at(v + d * r, q, texel);
-    t = q.xyz;
-    g = length(q.xyz - v);
-    return ok;
+    return receiver_at(x, t, texel);
 }
+
+void estimate_record(int record, int k, float d) {
+    history[record + k] = d;
+}
+
+#include "estimators.glsl"
 
 // The exit surface at x's projection into the object views (u_back_size texels per
 // view): position p and unit normal n; false unless it is `object`'s.
@@ -194,98 +186,6 @@ bool find_exit(vec3 v, vec3 r, int object, out float d, out vec3 bn) {
         if (back_at(v + d * r, object, bq, bm)) bn = bm;
     }
     return true;
-}
-
-int estimate(vec3 v, vec3 r, int hbase, out float d_out) {
-    float g0;
-    vec3 t;
-    d_out = 0.0;
-    float d, d_prev = 0.0, h_prev = 0.0;
-    bool have_prev = false;      // secant needs a previous point
-    if (u_start == 1) {
-        d = u_start_distance;
-    } else {
-        if (!lookup_g(v, r, 0.0, g0, t)) {
-            for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
-            return STATUS_LOST;
-        }
-        d = g0;
-        h_prev = g0;             // h(0) = g(0) - 0
-        have_prev = true;
-    }
-    float lo = 0.0, hi = -1.0;   // bracket of the root of h; hi < 0: no upper end yet
-    float seen = u_start == 1 ? -1.0 : 0.0;   // last d whose lookup found a receiver
-    int status = STATUS_HIT;
-    history[hbase] = d;
-    for (int k = 1; k <= u_iterations; ++k) {
-        float g;
-        if (status == STATUS_HIT && !lookup_g(v, r, d, g, t)) {
-            // Safeguarded: an estimate that sees no receiver has overshot the
-            // receiver's edge; step back halfway to the last one that saw one.
-            // The missed point becomes the previous one, so that a jump forward
-            // again is caught as oscillation (secant restarts: h there is unknown).
-            if (u_safeguarded == 1 && seen >= 0.0) {
-                hi = hi < 0.0 ? d : min(hi, d);
-                d_prev = d;
-                have_prev = false;
-                d = 0.5 * (seen + d);
-                history[hbase + k] = d;
-                continue;
-            }
-            status = STATUS_LOST;
-        }
-        if (status != STATUS_HIT) { history[hbase + k] = d; continue; }
-        seen = d;
-        float h = g - d;
-        if (h >= 0.0) lo = max(lo, d); else hi = hi < 0.0 ? d : min(hi, d);
-        float prop = d;
-        bool finite = true;
-        if (h == 0.0) {
-            prop = d;                               // at the root
-        } else if (u_estimator == 0) {
-            prop = g;                               // modified: d <- g(d)
-        } else if (u_estimator == 2) {
-            float den = h - h_prev;                 // secant on h
-            if (!have_prev) prop = g;               // fixed start: no previous point
-            else if (den != 0.0) prop = d - h * (d - d_prev) / den;
-            else finite = false;
-        } else {
-            float f = length(t - (v + d * r));      // Newton on f, forward difference
-            float g2;
-            vec3 t2;
-            if (!lookup_g(v, r, d + u_eps, g2, t2)) {
-                status = STATUS_LOST;
-                history[hbase + k] = d;
-                continue;
-            }
-            float fe = length(t2 - (v + (d + u_eps) * r));
-            float den = fe - f;
-            if (f == 0.0) prop = d;
-            else if (den != 0.0) prop = d - f * u_eps / den;
-            else finite = false;
-        }
-        if (!(abs(prop) < 1e30)) finite = false;
-        if (u_safeguarded == 1) {
-            bool osc = k >= 2 && (prop - d) * (d - d_prev) < 0.0
-                && abs(prop - d) >= 0.5 * abs(d - d_prev);
-            // Outside the bracket [lo, hi]; without an upper end yet, a step past
-            // twice the modified update's distance max(g, lo) is a runaway (a
-            // trust region), so it is replaced as well.
-            bool outside = prop < lo || (hi >= 0.0 ? prop > hi : prop > 2.0 * max(g, lo));
-            if (!finite || osc || outside) prop = hi >= 0.0 ? 0.5 * (lo + hi) : g;
-        } else if (!finite) {
-            status = STATUS_DIVERGED;
-            history[hbase + k] = d;
-            continue;
-        }
-        d_prev = d;
-        h_prev = h;
-        have_prev = true;
-        d = prop;
-        history[hbase + k] = d;
-    }
-    d_out = d;
-    return status;
 }
 
 void write_record(int base, vec3 v, float view, vec3 r, float d, vec3 p, int status,
@@ -376,8 +276,9 @@ void main() {
         flux *= exp(-u_absorption[object] * inside);  // Eq. 7 inside the solid
     }
 
-    float d;
-    int status = estimate(v, r, hbase, d);
+    float d, d_seen;
+    int status = estimate_along(0, v, r, u_start == 1 ? u_start_distance : -1.0, u_estimator,
+                                u_safeguarded == 1, hbase, d, d_seen);
     vec3 p = v + d * r;
     float receiver = -1.0;
     vec3 normal = vec3(0.0);

@@ -1,6 +1,7 @@
-// The intersection estimators of the caustic trace (caustic_trace.glsl, estimate(),
-// the same arithmetic without its per-iteration history) on any image-space
-// surface. The includer defines, before including this file,
+// The intersection estimators of the caustic trace (estimators.glsl: the same
+// arithmetic, without its per-iteration history) on any image-space surface, and
+// the camera pass's bracketed secant on the depth. The includer defines, before
+// including this file,
 //   bool surface_at(int surface, vec3 x, out vec4 t)
 //   float projection_distance(int surface, vec3 x)
 // : the point T(x) of surface `surface` seen through x's projection into that
@@ -10,116 +11,15 @@
 // distance). It defines ESTIMATOR (0 modified, 1 newton, 2 secant) and SAFEGUARDED
 // (0 or 1) at compile time (as uniforms, on llvmpipe, every variant's code ran
 // masked: 1.5x the time).
-//
-// With P(d) = v + d r, g(d) = |T(P(d)) - v|, h(d) = g(d) - d (the hit solves h = 0):
-//   modified (paper):     d <- g(d)
-//   newton (appendix):    f(d) = |T(P(d)) - P(d)|, d <- d - f(d) eps / (f(d+eps) - f(d))
-//   secant (distance impostors): d <- d - h(d) (d - d_prev) / (h(d) - h(d_prev))
-// from d_0 = 0, d_1 = g(0) (the surface seen through v itself), or from a given
-// d_1 (secant's first update is then the modified one, having no previous point).
-// Safeguarded: a bracket [lo, hi] with h(lo) >= 0 >= h(hi) is kept from every
-// lookup; an estimate whose lookup sees no surface becomes an upper end and the
-// next estimate is halfway back to the last one that saw the surface; an update
-// that is non-finite, leaves the bracket (or, with no upper end yet, goes past twice
-// the modified update), or oscillates (reverses without at least halving the step)
-// is replaced by bisection of the bracket (or the modified step).
 
-uniform int u_iterations;       // updates after d_1
-uniform float u_eps;            // Newton's finite-difference step (m)
+void estimate_record(int record, int k, float d) {}   // no history here
 
-const int ESTIMATE_HIT = 1;     // the iterations ran (no test of the residual)
-const int ESTIMATE_LOST = 2;    // a lookup saw no surface (unsafeguarded), or d_1 had none
-const int ESTIMATE_DIVERGED = 4;
-
-bool surface_g(int surface, vec3 v, vec3 r, float d, out float g, out vec3 t) {
-    vec4 q;
-    bool ok = surface_at(surface, v + d * r, q);
-    t = q.xyz;
-    g = length(q.xyz - v);
-    return ok;
-}
-
-// Estimate d on `surface` along v + d r, starting from d_1 = `start` (start < 0:
-// g(0)). `d_seen` is the last estimate whose lookup saw the surface (-1: none).
-int estimate_on(int surface, vec3 v, vec3 r, float start, out float d_out,
-                out float d_seen) {
-    vec3 t;
-    d_out = 0.0;
-    d_seen = -1.0;
-    float d, d_prev = 0.0, h_prev = 0.0;
-    bool have_prev = false;          // secant needs a previous point
-    if (start >= 0.0) {
-        d = start;
-    } else {
-        float g0;
-        if (!surface_g(surface, v, r, 0.0, g0, t)) return ESTIMATE_LOST;
-        d = g0;
-        h_prev = g0;                 // h(0) = g(0) - 0
-        have_prev = true;
-        d_seen = 0.0;
-    }
-    float lo = 0.0, hi = -1.0;       // bracket of the root of h; hi < 0: no upper end
-    int status = ESTIMATE_HIT;
-    for (int k = 1; k <= u_iterations; ++k) {
-        float g;
-        if (!surface_g(surface, v, r, d, g, t)) {
-            if (SAFEGUARDED == 1 && d_seen >= 0.0) {   // overshot the surface's edge
-                hi = hi < 0.0 ? d : min(hi, d);
-                d_prev = d;
-                have_prev = false;
-                d = 0.5 * (d_seen + d);
-                continue;
-            }
-            status = ESTIMATE_LOST;
-            break;
-        }
-        d_seen = d;
-        float h = g - d;
-        if (h >= 0.0) lo = max(lo, d); else hi = hi < 0.0 ? d : min(hi, d);
-        float prop = d;
-        bool finite = true;
-        if (h == 0.0) {
-            prop = d;                                   // at the root
-        } else if (ESTIMATOR == 0) {
-            prop = g;                                   // modified: d <- g(d)
-        } else if (ESTIMATOR == 2) {
-            float den = h - h_prev;                     // secant on h
-            if (!have_prev) prop = g;
-            else if (den != 0.0) prop = d - h * (d - d_prev) / den;
-            else finite = false;
-        } else {
-            float f = length(t - (v + d * r));          // Newton on f, forward difference
-            float g2;
-            vec3 t2;
-            if (!surface_g(surface, v, r, d + u_eps, g2, t2)) { status = ESTIMATE_LOST; break; }
-            float den = length(t2 - (v + (d + u_eps) * r)) - f;
-            if (f == 0.0) prop = d;
-            else if (den != 0.0) prop = d - f * u_eps / den;
-            else finite = false;
-        }
-        if (!(abs(prop) < 1e30)) finite = false;
-        if (SAFEGUARDED == 1) {
-            bool osc = k >= 2 && (prop - d) * (d - d_prev) < 0.0
-                && abs(prop - d) >= 0.5 * abs(d - d_prev);
-            bool outside = prop < lo || (hi >= 0.0 ? prop > hi : prop > 2.0 * max(g, lo));
-            if (!finite || osc || outside) prop = hi >= 0.0 ? 0.5 * (lo + hi) : g;
-        } else if (!finite) {
-            status = ESTIMATE_DIVERGED;
-            break;
-        }
-        d_prev = d;
-        h_prev = h;
-        have_prev = true;
-        d = prop;
-    }
-    d_out = d;
-    return status;
-}
+#include "estimators.glsl"
 
 // ------------------------------------------------ bracketed secant on the depth
 // The camera pass's safeguarded secant. Camera rays run at any angle to the
 // projection rays of the image they are traced in (a ring reflects the floor back
-// towards a low light), and there h(d) above can touch zero without crossing it,
+// towards a low light), and there h(d) (estimators.glsl) can touch zero without crossing it,
 // or cross it several times: on metal_ring, 78 % of the ring's pixels whose exact
 // reflection meets a lit floor failed the verified hit after 5 safeguarded secant
 // steps on h. The signed depth
@@ -139,7 +39,7 @@ int estimate_on(int surface, vec3 v, vec3 r, float start, out float d_out,
 //    without its one-sided stall); while one end's s is unknown, the secant through
 //    the last two points in front if it falls inside, else bisection.
 // The estimate is the final bracket's secant point, or its upper end where the
-// lower end's s is unknown; ESTIMATE_LOST where no point behind was found.
+// lower end's s is unknown; STATUS_LOST where no point behind was found.
 
 uniform float u_ray_scale;      // m: first probe where v sees no surface
 
@@ -160,7 +60,7 @@ int bracket_on(int surface, vec3 v, vec3 r, float start, out float d_out) {
     if (a_known && !(sa < 0.0)) {   // on the surface already (after a reflection there)
         a = 1e-3 * max(start, 0.0);
         a_known = a > 0.0 && surface_s(surface, v, r, a, sa);
-        if (a_known && !(sa < 0.0)) return ESTIMATE_LOST;
+        if (a_known && !(sa < 0.0)) return STATUS_LOST;
     }
     if (!(b > a)) {                 // d_1 = g(0): the surface seen through v itself
         vec4 t;
@@ -185,7 +85,7 @@ int bracket_on(int surface, vec3 v, vec3 r, float start, out float d_out) {
             b *= 2.0;
         }
     }
-    if (!bracketed) return ESTIMATE_LOST;
+    if (!bracketed) return STATUS_LOST;
     int side = 0;                   // the end that moved last: -1 a, +1 b
     for (int k = 0; k < u_iterations; ++k) {
         float c = 0.5 * (a + b);
@@ -216,7 +116,7 @@ int bracket_on(int surface, vec3 v, vec3 r, float start, out float d_out) {
             side = 1;
         }
     }
-    if (!b_known) return ESTIMATE_LOST;
+    if (!b_known) return STATUS_LOST;
     d_out = a_known ? b - sb * (b - a) / (sb - sa) : b;
-    return ESTIMATE_HIT;
+    return STATUS_HIT;
 }
