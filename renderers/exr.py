@@ -8,27 +8,19 @@ place, so a reader never sees a half-written file; the file gets the mode a plai
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import OpenEXR
 
 from scenes.errors import HarnessError
+from scenes.files import atomic_path
 
 __all__ = ["ExrError", "read_exr", "write_exr"]
 
 
 class ExrError(HarnessError, ValueError):
     """An EXR file is missing, truncated, corrupt, or lacks a channel."""
-
-
-def _umask() -> int:
-    """The process's umask (read by setting and restoring it)."""
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def write_exr(path: str | Path, layers: dict[str, np.ndarray]) -> None:
@@ -46,19 +38,10 @@ def write_exr(path: str | Path, layers: dict[str, np.ndarray]) -> None:
         raise ValueError(f"layers differ in size: {sorted(shapes)}")
     channels = {name: np.ascontiguousarray(a, dtype=np.float32) for name, a in layers.items()}
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".exr")
-    os.close(fd)
-    try:
-        OpenEXR.File(header, channels).write(tmp)
-        # mkstemp creates 0600 (and OpenEXR keeps the mode of the file it writes
-        # into); give the file the mode a plain open() would have, like every
-        # other output.
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    # OpenEXR keeps the mode of the file it writes into: atomic_path's, that of a
+    # plain open(), like every other output.
+    with atomic_path(path, suffix=".exr") as tmp:
+        OpenEXR.File(header, channels).write(str(tmp))
 
 
 def read_exr(path: str | Path) -> dict[str, np.ndarray]:

@@ -10,48 +10,129 @@ the document says why: a top-level ``"null_reasons"`` object maps the JSON Point
 (RFC 6901) of each such ``null`` to ``"NaN"``, ``"+Infinity"`` or ``"-Infinity"``,
 so a reader can tell a value that was never computed (a plain ``null``) from one
 that was computed and is not a finite number.
+
+File modes: ``mkstemp`` and ``mkdtemp`` create 0600 files and 0700 folders; every
+file and folder the tool writes gets instead the mode a plain ``open()`` or
+``mkdir()`` would give it, 0666 or 0777 less the process's umask
+(:func:`process_umask`). The umask is read without changing it: setting it (even to
+restore it at once) changes it for every thread of the process, and a file another
+thread creates in between (under a threaded Dask worker) would get mode 0666.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import shutil
+import stat
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["NULL_REASONS", "atomic_write_bytes", "dumps_strict", "jsonable", "strict_json"]
+__all__ = ["NULL_REASONS", "atomic_path", "atomic_write_bytes", "dumps_strict", "jsonable",
+           "make_temporary_folder", "process_umask", "strict_json"]
 
 #: Top-level key of a strict-JSON document that says why each ``null`` replaced a
 #: non-finite float (JSON Pointer to reason).
 NULL_REASONS = "null_reasons"
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+#: Where Linux (4.7 and later) shows a process's umask (the ``Umask:`` line, octal).
+_PROC_STATUS = "/proc/self/status"
 
 
-def atomic_write_bytes(path: str | Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically (temp file, fsync, rename)."""
+def _umask_from_proc() -> int | None:
+    """The ``Umask:`` line of :data:`_PROC_STATUS`, or None where there is none."""
+    try:
+        with open(_PROC_STATUS, encoding="ascii", errors="replace") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+def _umask_from_probe() -> int:
+    """The umask as the kernel applies it: the bits it clears from a probe file
+    created with mode 0777 in a fresh private temporary folder."""
+    folder = tempfile.mkdtemp(prefix=".umask-probe-")
+    try:
+        fd = os.open(os.path.join(folder, "probe"), os.O_CREAT | os.O_EXCL | os.O_WRONLY,
+                     0o777)
+        try:
+            return 0o777 & ~stat.S_IMODE(os.fstat(fd).st_mode)
+        finally:
+            os.close(fd)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def process_umask() -> int:
+    """The process's file-mode creation mask, read without changing it.
+
+    Linux: the ``Umask:`` line of ``/proc/self/status``. Elsewhere (or on a kernel
+    older than 4.7): the bits the kernel clears from a probe file created with mode
+    0777. Either way it is read on every call, so a umask the program changes later
+    is followed; ``os.umask`` is never called (see the module docstring).
+
+    Returns
+    -------
+    int
+        The umask, e.g. ``0o022``; a plain ``open()`` creates files with mode
+        ``0o666 & ~umask``, ``mkdir()`` folders with ``0o777 & ~umask``.
+    """
+    mask = _umask_from_proc()
+    return _umask_from_probe() if mask is None else mask
+
+
+def make_temporary_folder(parent: str | Path, prefix: str) -> Path:
+    """A new, uniquely named folder ``parent/PREFIXxxxxxxxx`` (``mkdtemp``) with the
+    mode a plain ``mkdir()`` gives (0777 less the umask), not ``mkdtemp``'s 0700."""
+    folder = Path(tempfile.mkdtemp(dir=parent, prefix=prefix))
+    try:
+        os.chmod(folder, 0o777 & ~process_umask())
+    except BaseException:
+        folder.rmdir()
+        raise
+    return folder
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | Path, *, suffix: str = ".tmp") -> Iterator[Path]:
+    """Yield a temporary path beside ``path`` to write into; on a normal exit it is
+    renamed onto ``path`` in one step, on an exception (an interrupt too) deleted.
+
+    The temporary file (``.NAME.XXXXXXXX`` + ``suffix``, in ``path``'s folder, so on
+    the same file system) exists, empty, with the mode a plain ``open()`` gives
+    (0666 less the umask); a writer that keeps the mode of the file it writes into
+    passes it on to ``path``.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        # mkstemp creates 0600; give the file the mode a plain open() would have.
-        os.chmod(tmp, 0o666 & ~_umask())
+        os.chmod(tmp, 0o666 & ~process_umask())
+        yield Path(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically (temp file, fsync, rename; see
+    :func:`atomic_path`)."""
+    with atomic_path(path) as tmp, open(tmp, "wb") as handle:
+        handle.write(data)
+        handle.flush()
+        os.fsync(handle.fileno())
 
 
 def jsonable(value: Any) -> Any:

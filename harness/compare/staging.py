@@ -22,14 +22,13 @@ import contextlib
 import os
 import secrets
 import shutil
-import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
 
 from harness.terminal import warn
 from scenes.errors import HarnessError
-from scenes.files import atomic_write_bytes
+from scenes.files import atomic_write_bytes, make_temporary_folder
 
 __all__ = ["MARKER", "SwapError", "staged_output"]
 
@@ -61,12 +60,6 @@ def _remove_stale(out_dir: Path) -> None:
                 if ((leftover / MARKER).is_file()
                         and now - leftover.stat().st_mtime > STALE_SECONDS):
                     shutil.rmtree(leftover, ignore_errors=True)
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def _swap(staging: Path, out_dir: Path) -> None:
@@ -109,8 +102,8 @@ def staged_output(out_dir: str | os.PathLike) -> Iterator[Path]:
     try:
         out_dir.parent.mkdir(parents=True, exist_ok=True)
         _remove_stale(out_dir)
-        staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.staging-",
-                                        dir=out_dir.parent))
+        # The output gets the mode a plain mkdir would give it, not mkdtemp's 0700.
+        staging = make_temporary_folder(out_dir.parent, f".{out_dir.name}.staging-")
     except OSError as error:
         warn(f"cannot create a staging folder beside {out_dir} ({error.strerror}): "
              "writing into it in place")
@@ -118,8 +111,6 @@ def staged_output(out_dir: str | os.PathLike) -> Iterator[Path]:
         yield out_dir
         return
     try:
-        # mkdtemp makes 0700; the output gets the mode a plain mkdir would give it.
-        os.chmod(staging, 0o777 & ~_umask())
         atomic_write_bytes(staging / MARKER, b"written by caustics; replaced by the next run\n")
         yield staging
     except BaseException:

@@ -8,6 +8,9 @@ A result directory holds ``camera.exr``, ``receiver_irradiance.exr`` (receiver 0
 (canonical form: keys sorted, no whitespace), so the manifest covers the JSON as
 well as the images.
 
+A result directory is an entry of the content-addressed store
+(:mod:`renderers.store`, ``result.json`` its manifest), which writes and verifies it.
+
 Writing: everything goes into a fresh temporary folder beside the target
 (``.NAME.tmp-XXXXXXXX``), which is renamed into place in one step; an existing
 folder holding only result files (a cache entry being replaced) is swapped out
@@ -18,8 +21,9 @@ older than :data:`STALE_AFTER`.
 
 Reading checks the entry against its schema (:func:`read_result_dir`): the JSON
 parses, its digest matches, the known keys have their types (unknown extra keys
-are allowed), every EXR is present with its recorded SHA-256 and size. Anything
-else (truncated EXR, killed writer, garbage, a hand-edited JSON) is a miss:
+are allowed), every EXR is present with its recorded SHA-256 and size (files other
+than the listed ones may sit beside them in a ``-o`` folder). Anything else
+(truncated EXR, killed writer, garbage, a hand-edited JSON) is a miss:
 :func:`load_entry` says why, warns in one line, and the caller re-renders.
 
 The key is the SHA-256 of the scene's physics: its fields less its file path and
@@ -35,17 +39,12 @@ processes rendering the same key serialise on an exclusive ``fcntl`` lock on
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import fcntl
 import hashlib
 import json
 import math
 import os
 import re
-import shutil
-import tempfile
-import time
 import warnings
 from pathlib import Path
 
@@ -53,8 +52,8 @@ import numpy as np
 
 from renderers.exr import ExrError, read_exr, write_exr
 from renderers.results import ReceiverMap, RenderResult
+from renderers.store import STALE_AFTER, StoreError, entry_lock, read_entry, write_entry
 from scenes.errors import HarnessError
-from scenes.files import dumps_strict
 from scenes.geometry import build_geometry
 from scenes.model import Scene
 
@@ -74,8 +73,6 @@ __all__ = ["CAMERA_INTEGRATORS", "FORMAT_VERSION", "STALE_AFTER", "CacheEntryErr
 #: photon drawn on its emission cone's or disk's edge no longer gets an infinite weight
 FORMAT_VERSION = 7
 RESULT_JSON = "result.json"
-#: Seconds after which a temporary folder left by a killed writer is removed.
-STALE_AFTER = 3600.0
 #: Camera integrators of the reference (``render_reference(camera=...)``), and the name
 #: each records as ``camera_integrator`` in its metadata.
 CAMERA_INTEGRATORS = {"trace": "camera_trace", "ptracer": "ptracer"}
@@ -83,7 +80,7 @@ CAMERA_INTEGRATORS = {"trace": "camera_trace", "ptracer": "ptracer"}
 NON_PHYSICAL = ("name", "description")
 
 
-class CacheEntryError(ExrError):
+class CacheEntryError(ExrError, StoreError):
     """A result directory or cache entry is incomplete or fails its schema."""
 
 
@@ -155,58 +152,12 @@ def cache_key(scene: Scene, versions: dict[str, str], *, camera: str = "trace") 
     return digest.hexdigest()
 
 
-@contextlib.contextmanager
-def entry_lock(root: Path, key: str):
-    """Exclusive lock on one key (released on exit, or by the OS if we are killed)."""
-    root.mkdir(parents=True, exist_ok=True)
-    with open(root / f"{key}.lock", "a+b") as handle:
-        fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(handle.fileno(), fcntl.LOCK_UN)
-
-
 def receiver_file_name(index: int) -> str:
     """``receiver_irradiance.exr`` for receiver 0, ``receiver_irradiance_I.exr`` after."""
     return "receiver_irradiance.exr" if index == 0 else f"receiver_irradiance_{index}.exr"
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _document_digest(document: dict) -> str:
-    """SHA-256 of the JSON document without its ``document_sha256`` key, in the
-    canonical form (keys sorted, no whitespace) that a parse and re-dump reproduce."""
-    rest = {k: v for k, v in document.items() if k != "document_sha256"}
-    text = json.dumps(rest, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
 # ------------------------------------------------------------------------- writing
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def _temp_prefix(name: str) -> str:
-    return f".{name}.tmp-"
-
-
-def _remove_stale_temporaries(parent: Path, *, now: float | None = None) -> None:
-    """Remove temporary folders (``.NAME.tmp-*``) in ``parent`` older than
-    :data:`STALE_AFTER`: what writers killed mid-write left behind. Younger ones
-    may belong to a writer still at work and are kept."""
-    now = time.time() if now is None else now
-    with contextlib.suppress(OSError):
-        for path in parent.glob(".*.tmp-*"):
-            with contextlib.suppress(OSError):
-                if path.is_dir() and now - path.stat().st_mtime > STALE_AFTER:
-                    shutil.rmtree(path, ignore_errors=True)
 
 
 #: Files a result directory may hold: the EXRs, the JSON, and the temporary files
@@ -221,34 +172,6 @@ def _only_result_files(directory: Path) -> bool:
     return all(_RESULT_FILE.fullmatch(p.name) and p.is_file() for p in directory.iterdir())
 
 
-def _move_into_place(staging: Path, directory: Path) -> None:
-    """Publish the finished ``staging`` folder as ``directory``.
-
-    Absent target: one rename. A target holding only result files: renamed aside,
-    the new folder renamed in, the old one removed. Any other folder (or a link to
-    one): the files are moved in one by one, ``result.json`` last (until it lands,
-    the old JSON's hashes no longer match the new EXRs, so a reader sees a miss,
-    never a mix).
-    """
-    try:
-        staging.rename(directory)
-        return
-    except OSError:
-        if not directory.is_dir():
-            raise
-    if not directory.is_symlink() and _only_result_files(directory):
-        old = Path(tempfile.mkdtemp(dir=directory.parent,
-                                    prefix=_temp_prefix(directory.name)))
-        directory.rename(old / directory.name)
-        staging.rename(directory)
-        shutil.rmtree(old, ignore_errors=True)
-        return
-    names = sorted(p.name for p in staging.iterdir())
-    for name in [n for n in names if n != RESULT_JSON] + [RESULT_JSON]:
-        os.replace(staging / name, directory / name)
-    staging.rmdir()
-
-
 def write_result_dir(directory: str | Path, result: RenderResult,
                      camera_variance: np.ndarray | None = None) -> dict:
     """Write a result directory atomically; return the JSON document.
@@ -258,20 +181,13 @@ def write_result_dir(directory: str | Path, result: RenderResult,
     temporary folders left there by killed writers, older than
     :data:`STALE_AFTER`, are removed first.
     """
-    directory = Path(directory)
-    directory.parent.mkdir(parents=True, exist_ok=True)
-    _remove_stale_temporaries(directory.parent)
-    staging = Path(tempfile.mkdtemp(dir=directory.parent,
-                                    prefix=_temp_prefix(directory.name)))
-    try:
-        # mkdtemp creates 0700; give the folder the mode a plain mkdir would have.
-        os.chmod(staging, 0o777 & ~_umask())
-        files, shapes = {}, {}
+    def fill(staging: Path) -> dict:
+        shapes = {}
         cam_layers = {"RGB": result.camera}
-        if camera_variance is None:
-            camera_variance = result.metadata.get("camera_variance")
-        if camera_variance is not None:
-            cam_layers["variance"] = camera_variance
+        variance = (result.metadata.get("camera_variance") if camera_variance is None
+                    else camera_variance)
+        if variance is not None:
+            cam_layers["variance"] = variance
         layers_of = {"camera.exr": cam_layers}
         for i, rmap in enumerate(result.receivers):
             layers = {"RGB": rmap.irradiance}
@@ -280,7 +196,6 @@ def write_result_dir(directory: str | Path, result: RenderResult,
             layers_of[receiver_file_name(i)] = layers
         for name, layers in layers_of.items():
             write_exr(staging / name, layers)
-            files[name] = _sha256(staging / name)
             shapes[name] = [int(n) for n in layers["RGB"].shape[:2]]
         # Arrays (the camera variance) live in the EXRs, not the JSON.
         document = {k: v for k, v in result.metadata.items() if not isinstance(v, np.ndarray)}
@@ -290,24 +205,11 @@ def write_result_dir(directory: str | Path, result: RenderResult,
             "timings": result.timings,
             "timer": result.timer,
             "receiver_extent": [list(r.extent) for r in result.receivers],
-            "files": files,
             "shapes": shapes,
         })
-        # The digest is taken over the document as a reader will parse it (tuples
-        # become lists, keys strings), so the reader's re-dump reproduces it.
-        # Strict JSON: a non-finite number is written as null with its reason.
-        document = json.loads(dumps_strict(document, sort_keys=True))
-        document["document_sha256"] = _document_digest(document)
-        text = dumps_strict(document, indent=2, sort_keys=True).encode()
-        with open(staging / RESULT_JSON, "wb") as handle:
-            handle.write(text)
-            handle.flush()
-            os.fsync(handle.fileno())
-        _move_into_place(staging, directory)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    return document
+        return document
+
+    return write_entry(directory, fill, manifest=RESULT_JSON, replace_whole=_only_result_files)
 
 
 # ------------------------------------------------------------------------- reading
@@ -376,13 +278,12 @@ _OPTIONAL = {
 }
 
 
-def _check_document(document, path: Path) -> None:
-    """Raise :class:`CacheEntryError` unless ``document`` fits the schema."""
+def _check_document(document: dict, path: Path) -> None:
+    """Raise :class:`CacheEntryError` unless ``document`` (a JSON object whose digest
+    the store has checked) fits the schema."""
     def bad(message: str) -> CacheEntryError:
         return CacheEntryError(f"{path}: {message}")
 
-    if not isinstance(document, dict):
-        raise bad(f"not a JSON object but {type(document).__name__}")
     for key, test in _REQUIRED.items():
         if key not in document:
             raise bad(f"no {key!r}")
@@ -391,8 +292,6 @@ def _check_document(document, path: Path) -> None:
     for key, test in _OPTIONAL.items():
         if key in document and not test(document[key]):
             raise bad(f"{key!r} has the wrong type or shape")
-    if document["document_sha256"] != _document_digest(document):
-        raise bad("content does not match its recorded SHA-256 (edited or corrupt)")
     for i, extent in enumerate(document["receiver_extent"]):
         if not (isinstance(extent, list) and len(extent) == 4
                 and all(_is_number(x) and math.isfinite(x) for x in extent)
@@ -435,17 +334,17 @@ def read_result_dir(directory: str | Path) -> RenderResult:
         SHA-256 or size, or an unreadable EXR.
     """
     directory = Path(directory)
-    path = directory / RESULT_JSON
     try:
-        document = json.loads(path.read_text())
-    except (OSError, ValueError) as error:
-        raise CacheEntryError(f"{path}: unreadable ({error})") from None
-    _check_document(document, path)
+        # Files beside the listed ones are allowed: a ``-o`` folder may hold others.
+        document = read_entry(directory, manifest=RESULT_JSON, exact=False,
+                              check=_check_document)
+    except CacheEntryError:
+        raise
+    except StoreError as error:
+        raise CacheEntryError(str(error)) from None
     layers_of = {}
-    for name, digest in document["files"].items():
+    for name in document["files"]:
         exr = directory / name
-        if not exr.is_file() or _sha256(exr) != digest:
-            raise CacheEntryError(f"{exr}: missing or does not match its recorded SHA-256")
         layers_of[name] = read_exr(exr)
         _check_layers(layers_of[name], document["shapes"][name], exr)
     camera = layers_of["camera.exr"]

@@ -33,6 +33,7 @@ from renderers.mitsuba.cache import (
     write_result_dir,
 )
 from renderers.mitsuba.reference import render_reference
+from renderers.store import document_digest, file_sha256
 from scenes import load_scene, parse_scene
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -257,7 +258,7 @@ def _rewrite(folder: Path, edit, *, fix_digest: bool) -> None:
     document = json.loads(path.read_text())
     edit(document)
     if fix_digest:
-        document["document_sha256"] = cache._document_digest(document)
+        document["document_sha256"] = document_digest(document)
     path.write_text(json.dumps(document, indent=2, sort_keys=True))
 
 
@@ -273,7 +274,7 @@ def test_the_written_entry_records_sizes_and_its_own_digest(entry):
     root, key, folder = entry
     document = json.loads((folder / "result.json").read_text())
     assert document["shapes"] == {"camera.exr": [16, 16], "receiver_irradiance.exr": [16, 16]}
-    assert document["document_sha256"] == cache._document_digest(document)
+    assert document["document_sha256"] == document_digest(document)
     assert load_entry(root, key)[1] == "hit"
 
 
@@ -326,7 +327,7 @@ def test_an_exr_of_the_wrong_size_is_a_miss(entry):
     root, key, folder = entry
     exr = folder / "receiver_irradiance.exr"
     write_exr(exr, {"RGB": np.zeros((8, 8, 3), np.float32)})
-    digest = cache._sha256(exr)
+    digest = file_sha256(exr)
     _rewrite(folder, lambda d: d["files"].update({"receiver_irradiance.exr": digest}),
              fix_digest=True)
     assert "layer RGB is (8, 8, 3), expected (16, 16, 3)" in _invalid(root, key)
