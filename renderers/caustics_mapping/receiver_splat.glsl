@@ -26,13 +26,14 @@ uniform vec4 u_row_v;
 uniform float u_uv_per_metre;
 uniform vec4 u_extent;             // umin, umax, vmin, vmax
 uniform ivec2 u_map_size;          // W, H
-uniform float u_sigma;             // points: caustic-map texels
-uniform float u_cut;               // sigmas
-uniform float u_max_radius;        // pixels
 
 #include "splat_kernels.glsl"
 
 #if defined VERTEX_SHADER || defined GEOMETRY_SHADER
+vec2 uv_span() {                    // umax - umin, vmax - vmin
+    return vec2(u_extent.y - u_extent.x, u_extent.w - u_extent.z);
+}
+
 vec2 uv_of(vec3 x) {
     if (u_uv_affine == 1)
         return vec2(dot(u_row_u, vec4(x, 1.0)), dot(u_row_v, vec4(x, 1.0)));
@@ -49,7 +50,7 @@ bool to_target(int record, out vec2 pix) {
     vec4 hit = splat_records[record * 5 + 2];
     float receiver = splat_records[record * 5 + 3].w;
     if (!splatted(hit.w, receiver) || int(receiver + 0.5) != u_receiver) return false;
-    vec2 span = vec2(u_extent.y - u_extent.x, u_extent.w - u_extent.z);
+    vec2 span = uv_span();
     pix = (uv_of(hit.xyz) - u_extent.xz) / span * vec2(u_map_size);
     return true;
 }
@@ -65,7 +66,7 @@ float uv_jacobian(vec3 n) {
 }
 
 float texel_area() {                // (u, v) units^2
-    vec2 span = vec2(u_extent.y - u_extent.x, u_extent.w - u_extent.z);
+    vec2 span = uv_span();
     return span.x * span.y / float(u_map_size.x * u_map_size.y);
 }
 #endif
@@ -82,62 +83,35 @@ float triangle_area(vec2 a, vec2 b, vec2 c, vec3 pa, vec3 pb, vec3 pc, vec3 n) {
 #include "splat_triangles.glsl"
 #else  // Gaussians
 #if defined VERTEX_SHADER
-in vec4 in_hit;
-in vec4 in_flux;
-in vec4 in_normal;
-flat out vec3 v_value;
-flat out vec2 v_center;
-flat out mat2 v_inverse;
-void main() {
-    v_value = vec3(0.0);
-    v_center = vec2(0.0);
-    v_inverse = mat2(1.0);
-    gl_PointSize = 1.0;
-    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
-    vec2 c;
-    if (!to_target(gl_VertexID, c)) return;
-    int per_view = u_grid * u_grid;
-    int view = gl_VertexID / per_view;
-    int local = gl_VertexID - view * per_view;
-    int tx = local % u_grid, ty = local / u_grid;
-    float share = gaussian_share(view, tx, ty);
-    if (share <= 0.0) return;
+// points: the width the splat has in the caustic map, u_sigma caustic-map texels at
+// the hit, in metres on the receiver, in (u, v), in map pixels (at least half a
+// pixel per axis); footprint: the grid's hit differences, that width where none is
+// known. A hit whose estimate P lies just off the (u, v) domain (its lookup found
+// this receiver, so it is at the edge) is clamped onto the border texels, so no
+// flux is lost between the caustic map and this map.
+mat2 gaussian_covariance(int view, int tx, int ty, vec3 hit, vec3 normal, inout vec2 c) {
     vec2 size = vec2(u_map_size);
-    vec2 span = vec2(u_extent.y - u_extent.x, u_extent.w - u_extent.z);
-    // The points width in map pixels: u_sigma caustic-map texels at the hit, in
-    // metres on the receiver, in (u, v), in pixels.
+    vec2 span = uv_span();
     int face;
     vec2 ndc;
     ivec2 texel;
-    map_locate(in_hit.xyz, u_caustic_size, face, ndc, texel);
-    float metres = u_sigma * sqrt(map_texel_area(in_hit.xyz, in_normal.xyz, ndc, u_caustic_size));
+    map_locate(hit, u_caustic_size, face, ndc, texel);
+    float metres = u_sigma * sqrt(map_texel_area(hit, normal, ndc, u_caustic_size));
     vec2 sigma = max(metres * u_uv_per_metre / span * size, vec2(0.5));
-    // A hit whose estimate P lies just off the (u, v) domain (its lookup found this
-    // receiver, so it is at the edge) is clamped onto the border texels, so no flux
-    // is lost between the caustic map and this map.
     c = clamp(c, vec2(0.5), size - 0.5);
-    mat2 cov = u_splat_mode == SPLAT_POINTS ? mat2(sigma.x * sigma.x, 0.0, 0.0, sigma.y * sigma.y)
+    return u_splat_mode == SPLAT_POINTS ? mat2(sigma.x * sigma.x, 0.0, 0.0, sigma.y * sigma.y)
         : footprint_covariance(view, tx, ty, c, max(sigma.x, sigma.y));
-    float radius = fit_radius(cov, u_cut, u_max_radius);
-    mat2 inv = inverse(cov);
-    float norm = gaussian_norm(c, inv, radius, u_cut, vec2(0.0), size);
-    if (!(norm > 0.0)) return;
-    v_value = share * in_flux.rgb / (norm * texel_area() * uv_jacobian(normalize(in_normal.xyz)));
-    v_center = c;
-    v_inverse = inv;
-    gl_PointSize = 2.0 * ceil(radius) + 1.0;
-    gl_Position = target_position(c);
 }
-#elif defined FRAGMENT_SHADER
-flat in vec3 v_value;
-flat in vec2 v_center;
-flat in mat2 v_inverse;
-out vec4 out_irradiance;
-void main() {
-    vec2 q = gl_FragCoord.xy - v_center;
-    float e = dot(q, v_inverse * q);
-    if (e > u_cut * u_cut) discard;
-    out_irradiance = vec4(v_value * exp(-0.5 * e), exp(-0.5 * e));
+
+void target_bounds(out vec2 lo, out vec2 hi) {
+    lo = vec2(0.0);
+    hi = vec2(u_map_size);
+}
+
+// A = one map pixel's (u, v) area times the surface area per (u, v) area.
+vec3 gaussian_value(vec3 flux, float norm, vec3 hit, vec3 normal) {
+    return flux / (norm * texel_area() * uv_jacobian(normalize(normal)));
 }
 #endif
+#include "splat_gaussians.glsl"
 #endif

@@ -30,6 +30,9 @@ uniform int u_grid;               // vertex grid per object view
 uniform int u_splat_mode;         // 0 points, 1 footprint, 2 triangles
 uniform float u_footprint_scale;  // footprint covariance scale
 uniform float u_max_triangle;     // pixels: wider triangles fall back to Gaussians
+uniform float u_sigma;            // points: Gaussian standard deviation (caustic-map texels)
+uniform float u_cut;              // Gaussian cut-off radius (sigmas)
+uniform float u_max_radius;       // Gaussian sprite radius cap (target pixels)
 
 const int SPLAT_POINTS = 0;
 const int SPLAT_FOOTPRINT = 1;
