@@ -76,9 +76,8 @@ def _has_open_mesh(scene: Scene) -> bool:
     meshes = [i for i, obj in enumerate(scene.objects) if isinstance(obj, MeshObject)]
     if not meshes:
         return False
-    # Deferred: scenes.geometry brings trimesh and scipy (about 2 s), which `import
-    # scenes` and `caustics --help` must not pay for; only mesh scenes get here.
-    from scenes.geometry import build_geometry  # noqa: PLC0415
+    # scenes.geometry brings trimesh and scipy (about 1 s); only mesh scenes get here.
+    from scenes.geometry import build_geometry  # noqa: PLC0415 - keeps `import scenes` light
 
     objects = build_geometry(scene).objects
     return any(not objects[i].mesh.closed for i in meshes)

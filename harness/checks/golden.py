@@ -41,6 +41,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import OpenEXR
 
 from renderers.exr import ExrError, read_exr
 from renderers.mitsuba._mi import versions
@@ -164,8 +165,6 @@ def fresh_reference(scene: Scene, *, seed: int, seeds: int = FRESH_SEEDS):
 
 def _write_half(path: Path, irradiance: np.ndarray, variance: np.ndarray) -> float:
     """Write one golden map (see the module docstring); returns its scale."""
-    import OpenEXR  # noqa: PLC0415  (only regeneration writes half floats)
-
     scale = float(np.max(irradiance)) or 1.0
     layers = {"RGB": (irradiance / scale).astype(np.float16),
               "sigma": (np.sqrt(np.maximum(variance, 0.0)) / scale).astype(np.float16)}

@@ -38,7 +38,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.special import erfc
+from scipy.special import erfc, erfcinv
+
+from renderers.exr import write_exr
 
 __all__ = ["PASS_FRACTION", "SIGNIFICANCE", "ZTest", "write_failure_images", "z_test"]
 
@@ -83,10 +85,9 @@ class ZTest:
 
 
 def _z_of(alpha: float) -> float:
-    """|z| at which the two-sided p-value equals ``alpha``."""
-    from scipy.stats import norm  # noqa: PLC0415
-
-    return float(norm.isf(alpha / 2))
+    """|z| at which the two-sided p-value equals ``alpha``: p = erfc(|z| / √2)
+    (as :func:`z_test` computes it), so |z| = √2 erfcinv(alpha)."""
+    return float(np.sqrt(2.0) * erfcinv(alpha))
 
 
 def z_test(test: np.ndarray, reference: np.ndarray, reference_variance: np.ndarray, *,
@@ -139,8 +140,6 @@ def write_failure_images(folder: str | Path, prefix: str, *, test: np.ndarray,
     signed), and with a Z-test ``_pvalue.exr`` and ``_error.exr`` (2 % of the test
     image, failed texels set to 1, as Mitsuba writes it) plus ``_error.png`` (failed
     texels red over the grey test image). Returns the paths written."""
-    from renderers.exr import write_exr  # noqa: PLC0415
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     test = np.asarray(test, np.float32)
@@ -165,7 +164,7 @@ def write_failure_images(folder: str | Path, prefix: str, *, test: np.ndarray,
 
 
 def _error_png(path: Path, test: np.ndarray, failed: np.ndarray) -> Path:
-    import matplotlib.image  # noqa: PLC0415
+    import matplotlib.image  # noqa: PLC0415 - matplotlib loads only for a failure's picture
 
     grey = test.mean(axis=-1)
     top = float(np.percentile(grey, 99.5)) or 1.0

@@ -19,6 +19,8 @@ import numpy as np
 
 from harness.compare.evaluate import score_value
 from harness.studies.timing import OneOffCosts, median_seconds
+from renderers.mitsuba import _mi
+from renderers.mitsuba.photons import PhotonTracer
 from scenes import Scene
 
 __all__ = ["CurvePoint", "ReferenceCurve", "reference_curve"]
@@ -75,9 +77,6 @@ def reference_curve(scene: Scene, reference: np.ndarray, caustic: np.ndarray, *,
     progress : callable, optional
         Called once per budget.
     """
-    from renderers.mitsuba import _mi  # noqa: PLC0415 (heavy: Mitsuba)
-    from renderers.mitsuba.photons import PhotonTracer  # noqa: PLC0415 (heavy: Mitsuba)
-
     _, dr, _ = _mi.load()
     # As in a fresh process: no kernel resident in memory (rendering the reference
     # in this process left them there); Dr.Jit's on-disk cache stays, as Mesa's

@@ -52,6 +52,7 @@ from harness.metrics import (
     structural_similarity,
 )
 from harness.studies.runner import frame_seconds
+from renderers.caustics_mapping.renderer import render
 from renderers.methods import Method
 from renderers.mitsuba.sequence import render_reference_frames
 from renderers.results import RenderResult
@@ -104,8 +105,6 @@ def _renderer(method: Method, ctx) -> Callable[[Scene], RenderResult]:
     context (one context for the sequence), any other method through its protocol."""
     if ctx is None or not method.studies:
         return method.render
-
-    from renderers.caustics_mapping.renderer import render  # noqa: PLC0415 - moderngl
 
     def render_in_context(frame: Scene) -> RenderResult:
         return render(method.configure(frame), ctx=ctx, geometry=build_geometry(frame))

@@ -162,7 +162,7 @@ def open_cluster(*, scheduler: str | None = None, scheduler_file: str | None = N
         The scheduler cannot be reached, or no worker joined in time.
     """
     import dask  # noqa: PLC0415 - Dask loads only for a sweep
-    from dask.distributed import Client, LocalCluster  # noqa: PLC0415
+    from dask.distributed import Client, LocalCluster  # noqa: PLC0415 - Dask, as above
 
     address = scheduler or dask.config.get("scheduler-address", None)
     with contextlib.ExitStack() as stack:

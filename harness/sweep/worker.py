@@ -51,8 +51,8 @@ def gl_context():
     """This process's (and thread's) moderngl context, made on first use."""
     ctx = getattr(_state, "ctx", None)
     if ctx is None:
-        # Deferred: moderngl is loaded only where a method renders.
-        from renderers.caustics_mapping.context import create_context  # noqa: PLC0415
+        # moderngl loads only in a worker that renders a method.
+        from renderers.caustics_mapping.context import create_context  # noqa: PLC0415 - moderngl
 
         ctx = _state.ctx = create_context()
     return ctx
@@ -68,8 +68,9 @@ def dask_setup(worker) -> None:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     threads = os.environ.get(THREADS_ENV, "").strip()
     if threads:
-        # Deferred: Dr.Jit loads (through the one module that may load it) only here.
-        from renderers.mitsuba import _mi  # noqa: PLC0415
+        # renderers.mitsuba (trimesh, scipy) and Dr.Jit load only in a worker told its
+        # thread count; the preload module stays light.
+        from renderers.mitsuba import _mi  # noqa: PLC0415 - Dr.Jit, see above
 
         _, dr, _ = _mi.load()
         dr.set_thread_count(int(threads))

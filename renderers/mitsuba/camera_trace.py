@@ -42,6 +42,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from tqdm import tqdm
 
 from renderers.mitsuba import _mi
 from renderers.mitsuba.camera_lookup import (
@@ -367,8 +368,6 @@ def render_traced_camera(scene: Scene, *, photons: int, spp: int | None = None,
     frames, samples, cut = [], 0, 0
     iterator = range(first, first + k)
     if progress:
-        from tqdm import tqdm  # noqa: PLC0415 - only for the progress bar
-
         iterator = tqdm(iterator, desc=f"camera trace ({spp} spp per seed)", unit="seed",
                         leave=False)
     for i in iterator:
