@@ -38,9 +38,12 @@
 // above: direct light with the shadow test, and the caustic map read bilinearly
 // over the texels that show the same receiver.
 #include "common.glsl"
+#if defined VERTEX_SHADER
+invariant gl_Position;      // the DEPTH_ONLY pre-pass and the shading pass agree exactly
+#endif
+#include "mesh_vertex.glsl"
 
-uniform mat4 u_camera_vp;
-uniform vec3 u_eye;
+uniform vec3 u_eye;                // m; u_vp (mesh_vertex.glsl) is the camera's world -> clip
 uniform vec3 u_albedo;
 uniform int u_receiver;
 uniform int u_direct;              // scene has direct lighting
@@ -81,10 +84,6 @@ const int MAX_INTERNAL = 2;        // internal reflections followed (ALL_PATHS)
 const int SURFACE_RECEIVERS = 0;   // the light's receiver positions atlas
 const int SURFACE_BACK = 1;        // the camera's back faces of object u_object
 const float PI = 3.14159265358979;
-
-float light_distance(vec3 x) {
-    return u_light_type == 2 ? dot(x, u_light_dir) : length(x - u_light_pos);
-}
 
 // Direct irradiance (W/m^2) at receiver point x, normal n, shadow-tested at its
 // projection (face, ndc) into the light's map views (found: it has one).
@@ -211,7 +210,7 @@ bool back_at(vec3 x, out vec4 p, out vec3 n) {
     vec2 ndc;
     p = vec4(0.0);
     n = vec3(0.0);
-    if (!project(u_camera_vp, x, ndc)) return false;
+    if (!project(u_vp, x, ndc)) return false;
     vec2 pix = (ndc * 0.5 + 0.5) * vec2(u_viewport);
     if (FILTERED == 1) {
         Bilinear b = bilinear_rect(u_back_positions, u_viewport, pix);
@@ -348,20 +347,7 @@ vec3 object_radiance(vec3 x, vec3 n, vec3 dv, float ior) {
 }
 #endif
 
-#if defined VERTEX_SHADER
-in vec3 in_position;
-in vec3 in_normal;
-out vec3 v_position;
-out vec3 v_normal;
-invariant gl_Position;      // the DEPTH_ONLY pre-pass and the shading pass agree exactly
-void main() {
-    v_position = in_position;
-    v_normal = in_normal;
-    gl_Position = u_camera_vp * vec4(in_position, 1.0);
-}
-#elif defined FRAGMENT_SHADER
-in vec3 v_position;
-in vec3 v_normal;
+#if defined FRAGMENT_SHADER
 out vec4 out_radiance;
 void main() {
     vec3 n = normalize(v_normal);

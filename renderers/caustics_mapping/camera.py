@@ -140,7 +140,7 @@ def _albedo_table(ctx: moderngl.Context, geometry: SceneGeometry) -> moderngl.Te
 def _set_common(program: moderngl.Program, light: LightSetup, camera: Camera,
                 inputs: CameraInputs) -> None:
     set_light_uniforms(program, light)
-    set_uniform(program, "u_camera_vp", camera_matrix(camera).T.astype(np.float32))
+    set_uniform(program, "u_vp", camera_matrix(camera).T.astype(np.float32))
     set_uniform(program, "u_eye", tuple(float(x) for x in camera.position))
     set_uniform(program, "u_direct", int(inputs.direct))
     set_uniform(program, "u_shadows", int(inputs.shadow_map is not None))
@@ -223,7 +223,7 @@ def render_camera(
     # back face ties the front face in depth (bunny 700 x 700, high_ior_tir); at such
     # a tie the fragment drawn last is kept.
     depth_program = load_program(ctx, "camera.glsl", defines={"DEPTH_ONLY": 1})
-    set_uniform(depth_program, "u_camera_vp", camera_matrix(camera).T.astype(np.float32))
+    set_uniform(depth_program, "u_vp", camera_matrix(camera).T.astype(np.float32))
     for mesh in objects:
         vao = mesh.vertex_array(depth_program)
         vao.render(moderngl.TRIANGLES)

@@ -7,6 +7,7 @@
 //   0: xyz world position (m) of the nearest back face, w = object index + 1
 //      (0: no back face of a closed dielectric in this pixel);
 //   1: xyz unit normal as stored in the mesh (outward: closed meshes), w = 0.
+// (surface_positions.glsl writes them; u_vp is the scene camera's world -> clip.)
 // Back faces are the triangles facing away from the eye by their winding (closed
 // meshes are counter-clockwise seen from outside): the pass culls the front ones.
 // Of several, the depth test keeps the nearest, where a view ray that entered the
@@ -14,26 +15,10 @@
 // normal: at a silhouette a front triangle's interpolated normal can point away from
 // the eye, and would hide the true exit behind a point on the front surface.)
 
-uniform mat4 u_camera_vp;  // world -> clip of the scene camera
-uniform int u_object;      // object index
+#include "surface_positions.glsl"
 
-#if defined VERTEX_SHADER
-in vec3 in_position;
-in vec3 in_normal;
-out vec3 v_position;
-out vec3 v_normal;
+#if defined FRAGMENT_SHADER
 void main() {
-    v_position = in_position;
-    v_normal = in_normal;
-    gl_Position = u_camera_vp * vec4(in_position, 1.0);
-}
-#elif defined FRAGMENT_SHADER
-in vec3 v_position;
-in vec3 v_normal;
-layout(location = 0) out vec4 out_position;
-layout(location = 1) out vec4 out_normal;
-void main() {
-    out_position = vec4(v_position, float(u_object + 1));
-    out_normal = vec4(normalize(v_normal), 0.0);
+    write_surface(normalize(v_normal));
 }
 #endif

@@ -79,14 +79,14 @@ def render_camera_backfaces(
     depth = resources.depth_texture(tuple(size))
     fbo = resources.framebuffer(textures, depth)
     program = load_program(ctx, "camera_backfaces.glsl")
-    set_uniform(program, "u_camera_vp", np.asarray(view_proj).T.astype(np.float32))
+    set_uniform(program, "u_vp", np.asarray(view_proj).T.astype(np.float32))
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
     ctx.enable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
     ctx.disable(moderngl.BLEND)
     ctx.cull_face = "front"          # keep the faces turned away from the eye
     for index in which:
-        set_uniform(program, "u_object", index)
+        set_uniform(program, "u_index", index)
         vao = objects[index].vertex_array(program)
         vao.render(moderngl.TRIANGLES)
         vao.release()

@@ -52,6 +52,12 @@ vec3 incident_dir(vec3 x) {
     return u_light_type == 2 ? u_light_dir : normalize(x - u_light_pos);
 }
 
+// Distance (m) of x from the light along its ray; for a directional light the signed
+// distance dot(x, u_light_dir) (the shadow map's r channel).
+float light_distance(vec3 x) {
+    return u_light_type == 2 ? dot(x, u_light_dir) : length(x - u_light_pos);
+}
+
 // Relative intensity along the unit travel direction l: spot cone (linear in angle
 // between beam width and cutoff, like Mitsuba's spot) and the Lambertian cosine of
 // an area-light sample.

@@ -83,7 +83,7 @@ def render_object_surfaces(
             fbo.viewport = (face * grid, 0, grid, grid)
             program["u_vp"].write(view.view_proj.T.astype("f4").tobytes())
             for index, vao in vaos.items():
-                program["u_object"] = index
+                program["u_index"] = index
                 vao.render(moderngl.TRIANGLES)
 
     draw()

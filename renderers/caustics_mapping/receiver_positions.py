@@ -64,7 +64,7 @@ def render_receiver_positions(
         fbo.viewport = (slot * size, 0, size, size)
         program["u_vp"].write(light.map_views[face].view_proj.T.astype("f4").tobytes())
         for index, vao in enumerate(vaos):
-            program["u_receiver"] = index
+            program["u_index"] = index
             vao.render(moderngl.TRIANGLES)
     for vao in vaos:
         vao.release()

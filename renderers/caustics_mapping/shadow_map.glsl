@@ -3,22 +3,11 @@
 // (m; for a directional light the signed distance dot(x, direction)), g = 1 where
 // an object was seen (0: nothing, fully lit).
 #include "common.glsl"
+#include "mesh_vertex.glsl"
 
-uniform mat4 u_vp;
-
-// Distance of x from the light along its ray (shared with camera.glsl).
-#if defined VERTEX_SHADER
-in vec3 in_position;
-out vec3 v_position;
-void main() {
-    v_position = in_position;
-    gl_Position = u_vp * vec4(in_position, 1.0);
-}
-#elif defined FRAGMENT_SHADER
-in vec3 v_position;
+#if defined FRAGMENT_SHADER
 out vec4 out_depth;
 void main() {
-    float dist = u_light_type == 2 ? dot(v_position, u_light_dir) : length(v_position - u_light_pos);
-    out_depth = vec4(dist, 1.0, 0.0, 0.0);
+    out_depth = vec4(light_distance(v_position), 1.0, 0.0, 0.0);
 }
 #endif
