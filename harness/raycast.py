@@ -14,10 +14,14 @@ import numpy as np
 
 from renderers.mitsuba._mi import load
 from renderers.mitsuba.exporter import export_scene
+from scenes.camera import camera_rays
 from scenes.geometry import SceneGeometry, TriangleMesh, build_geometry
 from scenes.model import Scene
 
-__all__ = ["RayHits", "ReceiverTracer", "SurfaceHits", "SurfaceTracer", "cast_rays"]
+#: ``camera_rays`` (the scene camera's primary rays, :mod:`scenes.camera`) is
+#: importable from here beside the tracers that cast them.
+__all__ = ["RayHits", "ReceiverTracer", "SurfaceHits", "SurfaceTracer", "camera_rays",
+           "cast_rays"]
 
 
 def _mitsuba():
@@ -199,29 +203,3 @@ class SurfaceTracer:
 def cast_rays(geometry: SceneGeometry, origins, directions) -> RayHits:
     """One-shot convenience: nearest receiver hit of each ray (see ``ReceiverTracer``)."""
     return ReceiverTracer(geometry)(origins, directions)
-
-
-def camera_rays(camera) -> tuple[np.ndarray, np.ndarray]:
-    """Primary rays through the pixel centres of a pinhole ``Camera``.
-
-    Returns origins and unit directions, each (H·W, 3), rows in image order (row 0
-    at the top). The field of view spans ``camera.fov_axis`` (Mitsuba's convention:
-    horizontal for ``"x"``).
-    """
-    eye = np.asarray(camera.position, np.float64)
-    forward = np.asarray(camera.look_at, np.float64) - eye
-    forward /= np.linalg.norm(forward)
-    right = np.cross(forward, camera.up)
-    right /= np.linalg.norm(right)
-    up = np.cross(right, forward)
-    width, height = camera.resolution
-    half = np.tan(np.radians(camera.fov) / 2)
-    aspect = width / height
-    half_x, half_y = (half, half / aspect) if camera.fov_axis == "x" else (half * aspect, half)
-    x = ((np.arange(width) + 0.5) / width * 2 - 1) * half_x
-    y = (1 - (np.arange(height) + 0.5) / height * 2) * half_y
-    gx, gy = np.meshgrid(x, y)
-    d = forward + gx[..., None] * right + gy[..., None] * up
-    d = d.reshape(-1, 3)
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    return np.broadcast_to(eye, d.shape).copy(), d

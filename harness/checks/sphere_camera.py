@@ -35,7 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from renderers.results import ReceiverMap
+from reports.display import luminance
 from scenes import effects_of
+from scenes.camera import pinhole_directions
 from scenes.model import (
     DielectricMaterial,
     DirectionalLight,
@@ -45,6 +47,8 @@ from scenes.model import (
     SphereObject,
 )
 
+#: ``luminance`` (Rec. 709, :func:`reports.display.luminance`) is importable from
+#: here beside the black level it is compared with.
 __all__ = ["BLACK_LEVEL", "SphereCamera", "analytic_sphere_camera", "black_fraction",
            "luminance"]
 
@@ -52,11 +56,6 @@ __all__ = ["BLACK_LEVEL", "SphereCamera", "analytic_sphere_camera", "black_fract
 #: 99th-percentile luminance: far below any lit pixel (the darkest lit floor pixel of
 #: glass_sphere is about 1e-2 of it), far above float noise of a black one.
 BLACK_LEVEL = 1e-4
-
-
-def luminance(image: np.ndarray) -> np.ndarray:
-    """Rec. 709 luminance of (..., 3) linear RGB."""
-    return image @ np.array([0.2126, 0.7152, 0.0722])
 
 
 def black_fraction(image: np.ndarray, mask: np.ndarray) -> float:
@@ -212,22 +211,12 @@ def analytic_sphere_camera(scene: Scene, caustic: ReceiverMap | None = None, *,
     width, height = cam.resolution
     s = int(supersample)
 
-    eye = np.asarray(cam.position, float)
-    forward = np.asarray(cam.look_at, float) - eye
-    forward /= np.linalg.norm(forward)
-    right = np.cross(forward, cam.up)
-    right /= np.linalg.norm(right)
-    up = np.cross(right, forward)
-    half = np.tan(np.radians(cam.fov) / 2)
-    half_x, half_y = ((half, half * height / width) if cam.fov_axis == "x"
-                      else (half * width / height, half))
+    # Film positions (pixels from the left / top edge) of the stratum centres.
     sub = (np.arange(s) + 0.5) / s
-    px = (np.arange(width)[:, None] + sub[None, :]).ravel()      # (W*s,) pixel units
-    py = (np.arange(height)[:, None] + sub[None, :]).ravel()
-    gx, gy = np.meshgrid(px / width * 2 - 1, 1 - py / height * 2)  # (H*s, W*s)
-    d = forward + (gx * half_x)[..., None] * right + (gy * half_y)[..., None] * up
-    d = (d / np.linalg.norm(d, axis=-1, keepdims=True)).reshape(-1, 3)
-    o = np.broadcast_to(eye, d.shape)
+    px = (np.arange(width)[:, None] + sub[None, :]).ravel()      # (W*s,)
+    py = (np.arange(height)[:, None] + sub[None, :]).ravel()     # (H*s,)
+    d = pinhole_directions(cam, *np.meshgrid(px, py)).reshape(-1, 3)
+    o = np.broadcast_to(np.asarray(cam.position, float), d.shape)
 
     near, _ = _sphere_hits(o, d, center, radius)
     on_sphere = np.isfinite(near) & (near > 0)

@@ -38,7 +38,6 @@ for the receiver hit alike):
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import moderngl
@@ -51,24 +50,18 @@ from renderers.caustics_mapping.lights import LightSetup, look_at
 from renderers.caustics_mapping.meshes import GpuMesh
 from renderers.caustics_mapping.receiver_positions import ReceiverPositions
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
+from scenes.camera import half_fov_tangents
 from scenes.geometry import SceneGeometry
 from scenes.model import Camera
 
 __all__ = ["CameraInputs", "camera_matrix", "pixel_width", "render_camera"]
 
 
-def _tangents(camera: Camera) -> tuple[float, float]:
-    """tan of the half field of view along x and y."""
-    w, h = camera.resolution
-    t = math.tan(math.radians(camera.fov) / 2)
-    return (t, t * h / w) if camera.fov_axis == "x" else (t * w / h, t)
-
-
 def camera_matrix(camera: Camera) -> np.ndarray:
     """World -> clip of the scene camera (OpenGL conventions)."""
     eye = np.asarray(camera.position, float)
     view = look_at(eye, np.asarray(camera.look_at) - eye, camera.up)
-    tx, ty = _tangents(camera)
+    tx, ty = half_fov_tangents(camera)  # the pinhole of scenes.camera
     dist = np.linalg.norm(np.asarray(camera.look_at) - eye)
     near, far = dist * 1e-3, dist * 1e2
     proj = np.zeros((4, 4))
@@ -81,7 +74,7 @@ def camera_matrix(camera: Camera) -> np.ndarray:
 
 def pixel_width(camera: Camera) -> float:
     """Width of one camera pixel at unit distance along the view axis (a tangent)."""
-    return 2 * _tangents(camera)[0] / camera.resolution[0]
+    return 2 * half_fov_tangents(camera)[0] / camera.resolution[0]
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)

@@ -40,6 +40,7 @@ from renderers.mitsuba.camera_trace import CameraTracer, render_traced_camera
 from renderers.mitsuba.noise import seed_statistics
 from renderers.mitsuba.reference import estimate_receivers
 from scenes import load_scene
+from scenes.camera import pinhole_directions
 from scenes.model import DielectricMaterial
 
 SCENES = Path(__file__).resolve().parents[3] / "scenes"
@@ -175,7 +176,7 @@ def test_sphere_shows_the_refracted_floor_and_caustic(fresnel, tmp_path, record_
 
     (1) Black fraction of the sphere's interior pixels (rays that leave for the sky
     after the second refraction; ``sphere_camera.black_fraction``): within 0.05 of
-    the exact one (issue 15's bound; about 41 % of the pixels are black, which the
+    the exact one (harness/checks/camera.py's bound; about 41 % of the pixels are black, which the
     method's single refraction to a plane does not reproduce). (2) Mean radiance over
     the interior within 2 % of the exact one (measured 0.3 %: the icosphere's
     facets and interpolated normals against the ideal sphere, and the lookup maps'
@@ -208,25 +209,6 @@ def test_sphere_shows_the_refracted_floor_and_caustic(fresnel, tmp_path, record_
 
 
 # ------------------------------------------------------------------ through the water
-
-
-def _pinhole(camera, fx, fy):
-    """Unit directions (..., 3) of the scene camera's rays through film positions
-    (fx, fy) in pixels (0 at the left / top edge): the perspective model of
-    harness/checks/sphere_camera.py (Mitsuba's ``perspective`` sensor)."""
-    width, height = camera.resolution
-    eye = np.asarray(camera.position, float)
-    forward = np.asarray(camera.look_at, float) - eye
-    forward /= np.linalg.norm(forward)
-    right = np.cross(forward, camera.up)
-    right /= np.linalg.norm(right)
-    up = np.cross(right, forward)
-    half = np.tan(np.radians(camera.fov) / 2)
-    half_x, half_y = ((half, half * height / width) if camera.fov_axis == "x"
-                      else (half * width / height, half))
-    gx, gy = fx / width * 2 - 1, 1 - fy / height * 2
-    d = forward + (gx * half_x)[..., None] * right + (gy * half_y)[..., None] * up
-    return d / np.linalg.norm(d, axis=-1, keepdims=True)
 
 
 def _plane_hits(o, d, z, half):
@@ -269,7 +251,7 @@ def test_pool_floor_is_seen_through_the_water(tmp_path, record_property):
     floor_half = np.asarray(scene.receivers[0].size) / 2
     centres = np.arange(POOL_RES) + 0.5
     fx, fy = np.meshgrid(centres, centres)
-    d = _pinhole(scene.camera, fx, fy)
+    d = pinhole_directions(scene.camera, fx, fy)
     eye = np.broadcast_to(np.asarray(scene.camera.position, float), d.shape)
     at, on_water = _plane_hits(eye, d, water.center[2], np.asarray(water.size) / 2)
     cos_i = -d[..., 2]
@@ -461,7 +443,7 @@ def _exact_direct(scene, light) -> tuple[np.ndarray, np.ndarray]:
     width, height = scene.camera.resolution
     fx, fy = np.meshgrid((np.arange(width * SUB) + 0.5) / SUB,
                          (np.arange(height * SUB) + 0.5) / SUB)
-    d = _pinhole(scene.camera, fx, fy)
+    d = pinhole_directions(scene.camera, fx, fy)
     eye = np.broadcast_to(np.asarray(scene.camera.position, float), d.shape)
     x, floor = _plane_hits(eye, d, 0.0, np.asarray(scene.receivers[0].size) / 2)
     kind = type(light).kind
@@ -566,7 +548,7 @@ def test_footprints_are_the_pinholes_on_the_floor():
     (measured,) = CameraTracer(scene).footprints()
     centres = np.arange(128) + 0.5
     fx, fy = np.meshgrid(centres, centres)
-    d = _pinhole(scene.camera, fx, fy)
+    d = pinhole_directions(scene.camera, fx, fy)
     eye = np.broadcast_to(np.asarray(scene.camera.position, float), d.shape)
     x, on_floor = _plane_hits(eye, d, 0.0, np.asarray(scene.receivers[0].size) / 2)
     exact_sphere = analytic_sphere_camera(scene, supersample=1)
