@@ -97,23 +97,6 @@ vec3 direct_part(vec3 x, vec3 n, int face, vec2 ndc, bool found) {
     return visible * direct_irradiance(x, n);
 }
 
-vec3 receiver_radiance(vec3 x, vec3 n, vec3 albedo, int receiver) {
-    int face;
-    vec2 ndc;
-    // One projection into the light's views serves the three map lookups.
-    bool found = map_project(x, face, ndc);
-    vec3 e = direct_part(x, n, face, ndc, found);
-    if (u_caustics == 1 && found) {
-        vec4 p = texelFetch(u_positions, map_texel(face, ndc, u_positions_size), 0);
-        float tol = 3.0 * sqrt(map_texel_area(x, n, ndc, u_positions_size));
-        if (int(p.w + 0.5) - 1 == receiver && length(p.xyz - x) <= tol) {
-            e += texelFetch(u_caustic_map, map_texel(face, ndc, u_caustic_size), 0).rgb;
-        }
-    }
-    return albedo / PI * e;
-}
-
-#if defined FRAGMENT_SHADER && defined OBJECT
 // The caustic map at `ndc` in view `face`, bilinear over the four nearest texels
 // that show `receiver` (the receiver the positions atlas shows at each texel's
 // centre), their weights renormalised; the nearest texel where none does.
@@ -140,22 +123,38 @@ vec3 caustic_filtered(int face, vec2 ndc, int receiver) {
     return texelFetch(u_caustic_map, map_texel(face, ndc, size), 0).rgb;
 }
 
-// Radiance (W m^-2 sr^-1) of receiver `receiver` at point y, normal n, seen
-// through the object: direct light shadow-tested, the caustic map filtered, where
-// the light's positions atlas shows y (as for receivers seen directly).
-vec3 hit_radiance(vec3 y, vec3 n, int receiver) {
+// Irradiance (W/m^2) at point x (unit normal n) of receiver `receiver`: the direct
+// light, shadow-tested, plus the caustic map where the light's positions atlas shows
+// x itself (the same receiver, within three positions texels), read at the nearest
+// texel or, `filtered`, by caustic_filtered. One projection into the light's views
+// serves the three map lookups.
+vec3 receiver_irradiance(vec3 x, vec3 n, int receiver, bool filtered) {
     int face;
     vec2 ndc;
-    bool found = map_project(y, face, ndc);
-    vec3 e = direct_part(y, n, face, ndc, found);
+    bool found = map_project(x, face, ndc);
+    vec3 e = direct_part(x, n, face, ndc, found);
     if (u_caustics == 1 && found) {
         vec4 p = texelFetch(u_positions, map_texel(face, ndc, u_positions_size), 0);
-        float tol = 3.0 * sqrt(map_texel_area(y, n, ndc, u_positions_size));
-        if (int(p.w + 0.5) - 1 == receiver && length(p.xyz - y) <= tol) {
-            e += caustic_filtered(face, ndc, receiver);
+        float tol = 3.0 * sqrt(map_texel_area(x, n, ndc, u_positions_size));
+        if (int(p.w + 0.5) - 1 == receiver && length(p.xyz - x) <= tol) {
+            if (filtered) e += caustic_filtered(face, ndc, receiver);
+            else e += texelFetch(u_caustic_map, map_texel(face, ndc, u_caustic_size), 0).rgb;
         }
     }
-    return texelFetch(u_albedos, ivec2(receiver, 0), 0).rgb / PI * e;
+    return e;
+}
+
+// Radiance (W m^-2 sr^-1) of a receiver drawn directly (albedo `albedo`).
+vec3 receiver_radiance(vec3 x, vec3 n, vec3 albedo, int receiver) {
+    return albedo / PI * receiver_irradiance(x, n, receiver, false);
+}
+
+#if defined FRAGMENT_SHADER && defined OBJECT
+// Radiance (W m^-2 sr^-1) of receiver `receiver` at point y, normal n, seen
+// through the object: as for receivers seen directly, the caustic map filtered.
+vec3 hit_radiance(vec3 y, vec3 n, int receiver) {
+    return texelFetch(u_albedos, ivec2(receiver, 0), 0).rgb / PI
+        * receiver_irradiance(y, n, receiver, true);
 }
 
 // T(x): the receiver the light sees through x, position t (w: receiver + 1) and
