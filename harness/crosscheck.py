@@ -18,8 +18,8 @@ and Var F(S) the sum of the texels' variances of the mean times the area squared
 
 The standard error of a ratio is r sqrt(Var_ref / F_ref^2 + Var_other / F_other^2).
 A comparison agrees when |r - 1| is within its tolerance: 0.5 % total, 1 %
-encircled, 2 % per region (the bounds of the issue "The reference keeps all the
-light"). ``z = (r - 1) / sigma`` says whether a miss is above noise.
+encircled, 2 % per region (docs/reference.md, "The LuxCore cross-check").
+``z = (r - 1) / sigma`` says whether a miss is above noise.
 """
 
 from __future__ import annotations

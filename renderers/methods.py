@@ -1,7 +1,7 @@
 """Methods: named renderers that the harness compares with the reference.
 
 A **method** turns a :class:`scenes.Scene` (its settings included) into a
-:class:`renderers.results.RenderResult` in the radiometric contract (DESIGN.md):
+:class:`renderers.results.RenderResult` in the radiometric contract (docs/architecture.md):
 a camera image in W m^-2 sr^-1 and one receiver irradiance map in W/m^2 per
 receiver, over the receiver's (u, v) extent. Methods are entry points of the group
 ``caustics_harness.methods``; the caustics-mapping presets ``paper`` and ``strong``

@@ -1,4 +1,4 @@
-"""Result types both renderers produce (the radiometric contract of DESIGN.md).
+"""Result types both renderers produce (the radiometric contract, docs/architecture.md).
 
 Map layout: a receiver irradiance map is a float32 array of shape (H, W, 3) over the
 receiver's (u, v) domain ``extent = (umin, umax, vmin, vmax)``; column i covers

@@ -10,7 +10,8 @@ from reports.records import Table
 
 __all__ = ["DECOMPOSITION_COLUMNS", "DecompositionRecord"]
 
-#: Columns of ``decomposition.csv``: the issue's eight, then the step before's relMSE,
+#: Columns of ``decomposition.csv``: eight per step (step, description, relMSE, SSIM,
+#: FLIP, flux ratio, peak ratio, time), then the step before's relMSE,
 #: the step's change of it, and the step's time split into where its records came
 #: from (``trace_ms``) and the splat passes (``splat_ms``).
 DECOMPOSITION_COLUMNS = ("step", "description", "relmse", "ssim", "flip", "flux_ratio",

@@ -12,7 +12,7 @@ the sphere's silhouette (``SphereCamera.interior``):
     |black fraction of the reference camera − the exact one| ≤ 0.05. The sphere is an
     inverted lens image whose pixels see the sky past the floor (black) or the floor;
     the black fraction measures whether the camera follows both refractions. 0.05 is
-    issue 15's bound: the icosphere's facets move the sky's edge by a pixel or so
+    the bound: the icosphere's facets move the sky's edge by a pixel or so
     (measured 0.002 at 512² on glass_sphere).
 
 Method target measures (``data/method_targets.toml``):
@@ -40,7 +40,7 @@ from scenes import Scene
 
 __all__ = ["LENS_BOUND", "camera_measures", "camera_requirements", "exact_camera"]
 
-#: Issue 15's bound on the reference's black fraction over the sphere.
+#: Bound on the reference's black fraction over the sphere (module docstring).
 LENS_BOUND = 0.05
 
 
@@ -67,7 +67,8 @@ def camera_requirements(exact: SphereCamera, reference_camera: np.ndarray
         provenance=(f"|black fraction over the sphere − the exact lens image's "
                     f"({exact.black_fraction:.3f})|; the exact: the ideal sphere's two "
                     "refractions to the plane, shaded with the analytic direct light "
-                    "and the reference's caustic map; 0.05: issue 15"),
+                    "and the reference's caustic map; 0.05: the icosphere's facets move "
+                    "the sky's edge by about a pixel"),
         category=PHYSICAL, subject="reference")]
 
 

@@ -114,7 +114,8 @@ class DecompositionOptions:
     Attributes
     ----------
     dense_grid : int or None
-        Vertices per side of step 0's lattice (the issue asks for ≥ 1024); None
+        Vertices per side of step 0's lattice (≥ 1024 by default, so that exact
+        paths reach the reference's noise: docs/architecture.md); None
         leaves step 0 out.
     dense_seed : int
         Seed of step 0's lattice offset.

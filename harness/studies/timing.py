@@ -34,8 +34,8 @@ from typing import Any
 
 __all__ = ["MIN_REPEATS", "TIMING_POLICY", "OneOffCosts", "median_seconds"]
 
-#: Fewest repeats whose median is reported as a warm time (the issue "What accuracy
-#: costs in time, like for like").
+#: Fewest repeats whose median is reported as a warm time (docs/statistics.md,
+#: "Timing policy: warm and cold").
 MIN_REPEATS = 5
 
 #: One line for reports and CSV readers.

@@ -227,7 +227,7 @@ void main() {
     vec3 n = texelFetch(u_front_normals, a, 0).xyz;
     if (dot(n, l) > 0.0) n = -n;               // face the light (two-sided surfaces)
 
-    // Flux carried by this grid texel (DESIGN.md, radiometric contract): I * the
+    // Flux carried by this grid texel (radiometric contract, docs/method.md): I * the
     // texel's solid angle (point, spot) or E0 * its area across the beam
     // (directional); or the paper's Eq. 6, (N . L) / V in units of the light's power.
     vec3 flux;

@@ -1,5 +1,5 @@
 // Pass 3c: splat the same trace records into one receiver's (u, v) irradiance map
-// (DESIGN.md, radiometric contract), with the kernels of splat_kernels.glsl. Row 0
+// (radiometric contract: W per m² of receiver surface), with the kernels of splat_kernels.glsl. Row 0
 // of the target is v = vmin, column 0 u = umin.
 //
 // Output (RGBA32F, u_map_size texels): rgb caustic irradiance E (W/m^2 of receiver

@@ -1,6 +1,6 @@
 """Second renderer: LuxCore (pyluxcore, LIGHTCPU light tracing) as an independent check
-of the Mitsuba reference's receiver caustic irradiance maps (DESIGN.md, "Second
-renderer"). pyluxcore is imported only by a render worker process, never into the caller's.
+of the Mitsuba reference's receiver caustic irradiance maps (docs/reference.md, "The LuxCore
+cross-check"). pyluxcore is imported only by a render worker process, never into the caller's.
 """
 
 from renderers.luxcore._lux import LuxCoreUnavailable

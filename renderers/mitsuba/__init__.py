@@ -1,4 +1,4 @@
-"""Mitsuba 3 ground truth for the caustics harness (DESIGN.md, "Mitsuba reference").
+"""Mitsuba 3 ground truth for the caustics harness (docs/reference.md).
 
 No module here imports Mitsuba or Dr.Jit at import time; :func:`._mi.load` does it,
 once, on first use, after :func:`renderers.mitsuba.llvm.configure_drjit` has set

@@ -1,6 +1,6 @@
 """Benchmark: what each side costs, warm, in one run, each measurement in a fresh
-process so that its peak memory is its own (issue "What accuracy costs in time,
-like for like").
+process so that its peak memory is its own (the timing policy of
+docs/statistics.md, "Timing policy: warm and cold").
 
 Printed in one table (glass_sphere, receiver maps 256 x 256, camera 512 x 512):
 

@@ -58,8 +58,8 @@ def test_cost_of_the_path_limit(request, monkeypatch):
     both alike. The time ratio is the cost of keeping the light that long TIR chains
     carry; beside it, the extra work those chains are (ray casts with the 64-event
     cap over ray casts with the 8-event cap, counted by the tracer) and the cut flux
-    fraction of each cap. Issue 21 asks that the time ratio exceed 1 by no more than
-    the extra work does."""
+    fraction of each cap. The time ratio should exceed 1 by no more than the extra
+    work does (docs/reference.md, "Where a path stops")."""
     pytest.importorskip("pymeshlab")
     scene = full_transport(with_settings(
         load_scene(request.config.rootpath / "scenes" / "bunny.toml"),

@@ -1,5 +1,5 @@
 """Benchmark: the two caustics-mapping presets' frame times, and their ratio, taken
-in one run (issue "Caustic maps without an implementation error floor").
+in one run (docs/method.md, "Presets: paper and strong").
 
 Both presets render the same scene at its own settings in one GL context; each is
 warmed up once (shader compilation is not a frame cost), then ROUNDS rounds alternate

@@ -1,4 +1,4 @@
-"""Benchmark: building the HTML report of one scene (issue 6: under 10 s).
+"""Benchmark: building the HTML report of one scene (budget: under 10 s).
 
 The scene is synthetic but full-size (512×512 camera image, 256×256 receiver map,
 convergence and cost studies) and already compared, like a compare run with a
@@ -14,7 +14,8 @@ from tests.reports.conftest import make_comparison
 
 pytestmark = pytest.mark.bench
 
-#: The issue's budget for one scene's report, seconds.
+#: Budget for one scene's report, seconds: a page that takes longer than a
+#: reader waits for a local file is a defect.
 BUDGET_S = 10.0
 
 

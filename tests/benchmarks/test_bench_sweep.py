@@ -1,5 +1,5 @@
 """Benchmark: wall time of one sweep on a local Dask cluster of 1 and of 2 process
-workers, as a ratio (issue "Sweeps that outgrow one machine").
+workers, as a ratio (docs/architecture.md, "Sweeps on a Dask cluster").
 
 The sweep is the tests' small one (2 scenes x 2 settings of the paper preset, 2
 reference seeds and an independent reference on 2 more) with 200 000 photons per

@@ -1,5 +1,5 @@
 """The bad-input corpus: malformed or awkward scene files and command lines, each with
-its expected outcome (issue "Every failure is one clear line").
+its expected outcome: every failure is one clear line.
 
 A case is a scene text (the base scene with edits), extra files beside it, a command
 line and what must come of it: an exit status, and either a regular expression that

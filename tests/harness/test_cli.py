@@ -15,7 +15,7 @@ from tests.conftest import REPO, SCENES, all_scene_files
 
 def test_validate_all_committed_scenes_json(capsys):
     """`caustics validate scenes/*.toml scenes/hard/*.toml --json` exits 0 and lists
-    the effects the issue names for the paper scenes."""
+    the effects the README's scene table names for the paper scenes."""
     paths = [str(p) for p in all_scene_files()]
     assert main(["validate", *paths, "--json"]) == 0
     report = json.loads(capsys.readouterr().out)

@@ -1,6 +1,6 @@
 """Every failure is one clear line: the bad-input corpus (``corpus_cases.py``).
 
-Regression lock of the issue "Every failure is one clear line": each malformed or
+Regression lock of "every failure is one clear line": each malformed or
 awkward scene file and command line gives its expected exit status and either an
 ``error:`` line naming what is wrong, or a finite result; none ends in a traceback.
 The command runs in-process through ``harness.cli.main``, exactly as the console
@@ -20,12 +20,12 @@ from harness.cli import main
 from renderers.exr import read_exr
 from tests.harness.corpus_cases import CASES, Case
 
-#: The issue asks for at least 80 cases.
+#: At least 80 cases (the corpus's size when it was locked: a case dropped is seen).
 MINIMUM_CASES = 80
 
 
 def test_the_corpus_is_large_enough():
-    """Regression lock: the corpus keeps at least 80 cases (the issue's number)."""
+    """Regression lock: the corpus keeps at least 80 cases (MINIMUM_CASES)."""
     print(f"\nbad-input corpus: {len(CASES)} cases")
     assert len(CASES) >= MINIMUM_CASES
     assert len({c.id for c in CASES}) == len(CASES), "case ids must be unique"

@@ -2,7 +2,7 @@
 caustic of glass_sphere and the bunny with full transport (physical requirement:
 the same light paths, rendered twice, give the same flux within noise).
 
-Two demands, from the issue "The reference keeps all the light":
+Two demands (docs/reference.md, "The LuxCore cross-check"):
 
 * agreement within noise: every comparison's z = (ratio - 1) / sigma within the
   two-sided critical value at a family-wise 1 % (Sidak over all comparisons);

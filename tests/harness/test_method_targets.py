@@ -1,9 +1,9 @@
 """Method targets (harness/checks/data/method_targets.toml) against the Mitsuba
 reference, at the scenes' own settings. Kind: **method target** — what a preset
-should reach, each number with its reason in the file (most from issue 11, "Caustic
-maps without an implementation error floor"). A target missed today carries its gap
-and is a strict ``xfail`` naming it; a target with a ``contrast`` method is also
-shown missed by that method, so the measure can fail.
+should reach, each number with its reason in the file (docs/method.md, "Presets").
+A target missed today carries its gap and is a strict ``xfail`` naming it; a target
+with a ``contrast`` method is also shown missed by that method, so the measure can
+fail.
 
 Measured on this machine (llvmpipe; reference 4 seeds x 2 M photons at 256², fresh in
 a temporary cache):

@@ -1,6 +1,6 @@
 """Property-based: valid but extreme scenes render without a traceback, NaN or hang.
 
-Regression lock of the issue "Every failure is one clear line": Hypothesis mutates
+Regression lock of "every failure is one clear line": Hypothesis mutates
 the corpus base scene (a glass sphere over a floor) into legal extremes: lights
 near and far, grazing and below the floor, tiny and huge intensities, near-unit and
 high IORs, tiny and large spheres, either preset and estimator, few iterations, a

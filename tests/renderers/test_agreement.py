@@ -57,7 +57,7 @@ seeds = 2
 
 def test_glass_sphere_flux_matches_photon_tracer(ctx):
     """glass_sphere, radiometric normalisation: the caustics-mapping receiver map's
-    total flux is within 5 % (the issue's bound) of the Mitsuba photon tracer's
+    total flux is within 5 % (the bound set before the golden checks) of the Mitsuba photon tracer's
     (L T T D chain only, no Fresnel), at the default 128² grid. The measured ratio is
     printed; the photon tracer's own noise on the total flux is < 0.5 % here."""
     scene = with_settings(load_scene(SCENES / "glass_sphere.toml"),

@@ -245,7 +245,7 @@ def test_crosscheck_section_shows_the_result_when_one_was_run(tmp_path, comparis
 
 
 def test_an_open_mesh_is_said_on_the_page(tmp_path, comparison):
-    """Regression lock (issue "Every failure is one clear line"): a scene with a
+    """Regression lock ("every failure is one clear line"): a scene with a
     non-watertight mesh says on its page that it was rendered as an open surface;
     a scene without one says nothing of the kind."""
     build_report(tmp_path / "open", [replace(comparison, effects=(*comparison.effects,

@@ -1,4 +1,4 @@
-"""Honest headlines (issue 17, part 4) on the page, in metrics.json and in the CLI
+"""Honest headlines (docs/statistics.md) on the page, in metrics.json and in the CLI
 summary: a reference that missed its noise target, an error within the noise floor, a
 speedup withheld where the error means nothing, and the paper's claims with their
 uncertainty. The comparisons are the synthetic ones of ``tests/reports/conftest.py``
@@ -46,7 +46,7 @@ def _reference(comparison, **reference):
 
 
 def test_reference_that_missed_its_noise_target_gets_a_banner(tmp_path, comparison):
-    """Method target (the issue's case): a torus reference stopped at its budget with
+    """Method target (a case seen in practice): a torus reference stopped at its budget with
     a relative noise of 0.023 against a target of 0.01; the page opens with a warning
     naming both numbers, while a reference that met its target (or stopped there)
     gets none."""
@@ -81,7 +81,7 @@ def test_error_within_the_noise_floor_gets_a_banner_and_no_speedup(tmp_path, com
 
 
 def test_speedup_is_withheld_when_the_error_is_enormous(tmp_path, comparison):
-    """Method target (the issue's case: a speedup printed at relMSE 3.6): at relMSE >=
+    """Method target (a case seen in practice: a speedup printed at relMSE 3.6): at relMSE >=
     1, worse than a black image, the page shows no speedup in the cost section but
     the reason at the top; metrics.json keeps the computed values with ``shown``
     false; the CLI summary says withheld. The fixture's own speedup (relMSE well
@@ -130,7 +130,7 @@ def test_speedup_is_withheld_beyond_the_reference_curve(comparison):
 
 
 def test_a_claim_within_twice_its_uncertainty_reads_undecided(tmp_path, comparison):
-    """Method target (the issue's case, "ratio 1.110; claim allows 1.10"): with the
+    """Method target (a case seen in practice, "ratio 1.110; claim allows 1.10"): with the
     ratio's standard error 0.012 from the reference's noise, the margin -0.010 is
     within 2σ = 0.024, so the rendered page says "undecided at this noise" with the
     uncertainty, at the top and in the claims section; the p95 claim, 0.4 ± 0.05

@@ -1,7 +1,7 @@
 """The camera checks of ``compare`` (harness/checks/camera.py) fail on the two wrong
-lens images issue 15 names. Kind: physical requirement (the reference's lens image)
-and method target measures; that the real renderers pass is shown by
-tests/renderers/mitsuba/test_camera_trace.py and
+lens images a renderer can draw (black, or one refraction to a plane). Kind:
+physical requirement (the reference's lens image) and method target measures; that
+the real renderers pass is shown by tests/renderers/mitsuba/test_camera_trace.py and
 tests/renderers/caustics_mapping/test_camera_pass.py, and by test_method_targets.py."""
 
 from __future__ import annotations
@@ -31,7 +31,8 @@ def sphere():
 
 def test_a_black_sphere_fails_the_lens_image(sphere):
     """ptracer draws the sphere black: its black fraction 1 is far from the exact
-    lens image's (about 0.5 without the caustic), beyond issue 15's 0.05."""
+    lens image's (about 0.5 without the caustic), beyond the bound 0.05
+    (harness/checks/camera.py)."""
     _, exact = sphere
     black = exact.image.copy()
     black[exact.sphere] = 0

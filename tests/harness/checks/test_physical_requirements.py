@@ -103,11 +103,11 @@ def test_physical_requirement_of_method(method_checks, record_property, name, me
 
 
 def test_bunny_flux_excess_is_a_known_gap_of_both_presets(method_checks, record_property):
-    """The bunny's flux excess (issue 13: +8.5 %) measured against the flux-agreement
-    requirement (2 % + 4 standard errors of the golden's total, ±2.05 %): it is still
-    there in both presets (+8.5 % paper, +6.7 % strong; the strong preset's fitted
-    frustum and verified hits did not remove it), so both carry a known gap; this
-    test fails if the excess disappears without the gap entry going."""
+    """The bunny's flux excess (+8.5 %, docs/method.md "Known gaps") measured against
+    the flux-agreement requirement (2 % + 4 standard errors of the golden's total,
+    ±2.05 %): it is still there in both presets (+8.5 % paper, +6.7 % strong; the strong
+    preset's fitted frustum and verified hits did not remove it), so both carry a known
+    gap; this test fails if the excess disappears without the gap entry going."""
     record_property("checks", 2)
     for method in ("paper", "strong"):
         (flux,) = [c for c in method_checks("bunny", method) if c.metric == "flux agreement"]

@@ -72,7 +72,7 @@ def test_deviation_matches_the_closed_form():
 def test_glass_sphere_shows_the_sky_through_its_lens(glass_sphere):
     """Physical requirement: the paper's glass sphere is an inverted lens image in
     which a large share of pixels see past the 8 x 8 m floor into the empty sky.
-    Without shadows only the sky is black; the issue's independent exact ray trace
+    Without shadows only the sky is black; an independent exact ray trace
     measured 44 % (tolerance 0.03 for its different sampling). Shadows add the floor
     under the ball, so the black fraction must grow."""
     no_shadow = dataclasses.replace(glass_sphere,

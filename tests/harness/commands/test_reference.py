@@ -1,4 +1,4 @@
-"""``caustics reference`` writes the EXRs and the result.json keys the issue names."""
+"""``caustics reference`` writes the EXRs and the result.json keys the README's CLI table names."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""``caustics render`` writes the files the issue names, with finite contents."""
+"""``caustics render`` writes the files the README's CLI table names, with finite contents."""
 
 from __future__ import annotations
 

@@ -42,8 +42,8 @@ def test_probe_flux_is_the_analytic_sphere_flux():
 
 def test_validate_refuses_a_caustic_that_misses_every_receiver(tmp_path, minimal_scene_text,
                                                                 capsys):
-    """Regression lock of the issue "Every failure is one clear line" ("validate
-    predicts compare"): a 1 x 1 m receiver moved 6 m aside of the sphere's caustic
+    """Regression lock of "every failure is one clear line" ("validate predicts
+    compare"): a 1 x 1 m receiver moved 6 m aside of the sphere's caustic
     passes every geometric check, yet its reference holds no caustic, on which
     ``compare`` fails. validate says so in one error line naming the file and the
     receivers, and exits 1; --no-trace skips the probe (exit 0); the good scene's

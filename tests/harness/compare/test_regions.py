@@ -69,7 +69,7 @@ def test_blind_reference_camera_is_detected():
 
 
 def test_water_pool_camera_is_scored_against_the_camera_tracer():
-    """Issue 15: every scene gets a camera comparison. On water_pool the floor is seen
+    """Every scene gets a camera comparison. On water_pool the floor is seen
     only through the water, which a ptracer reference renders black, so with ptracer
     the camera is left out with a note; the camera tracer's reference is compared,
     with the object region (the water surface seen through) scored."""

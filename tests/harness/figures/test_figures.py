@@ -124,11 +124,11 @@ def test_fig08_is_the_water_animation_with_its_flicker(figures):
 
 
 def test_camera_figures_score_the_object_seen_through(figures):
-    """Figs. 1, 6, 9 and 10 (issue 15): both renderers draw the refractive object, so
-    each camera figure scores the object region (the pixels inside its silhouette),
-    per method. At the quick figures' 128² camera the glass sphere's silhouette holds
-    about 930 pixels and the bunny's more (harness.compare.regions), so each region
-    has over 300; every object metric is a finite number."""
+    """Figs. 1, 6, 9 and 10 (the camera view the paper shows): both renderers draw the
+    refractive object, so each camera figure scores the object region (the pixels inside
+    its silhouette), per method. At the quick figures' 128² camera the glass sphere's
+    silhouette holds about 930 pixels and the bunny's more (harness.compare.regions), so
+    each region has over 300; every object metric is a finite number."""
     rows = _csv(figures / "fig09.csv") + _csv(figures / "fig01.csv")
     assert {r["scene"] for r in rows} == {"glass_sphere", "bunny", "colored_bunny"}
     assert {r["method"] for r in _csv(figures / "fig01.csv")} == {"paper preset",

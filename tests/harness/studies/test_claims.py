@@ -42,10 +42,10 @@ def test_one_iteration_both_ways():
     assert not holds
 
 
-# --- Verdicts with uncertainty (issue 17, part 4) ------------------------------------
+# --- Verdicts with uncertainty (docs/statistics.md) ----------------------------------
 
 @pytest.mark.parametrize(("value", "se", "verdict"), [
-    (1.110, 0.012, "undecided at this noise"),  # the issue's ratio: margin -0.010 < 2σ
+    (1.110, 0.012, "undecided at this noise"),  # ratio 1.110: margin -0.010 < 2σ
     (1.110, 0.004, "does not hold"),            # margin -0.010 beyond 2σ = 0.008
     (1.050, 0.020, "holds"),                    # margin 0.050 >= 2σ = 0.040
     (1.050, 0.030, "undecided at this noise"),  # margin 0.050 < 2σ = 0.060

@@ -1,7 +1,7 @@
 """Where the error comes from (``harness.studies.decomposition``): exact light paths
 on the method's grid, then the method's approximations one at a time.
 
-Kinds, per test: the issue's **method target** (issue 14: on glass_sphere the
+Kinds, per test: the **method target** ("unbiased pipeline": on glass_sphere the
 ``exact`` step's caustic-region relMSE is at most 0.01 at grid 128; with a dense grid
 within 2× the reference's noise floor, slow); **physical requirements** (the
 expected noise floor is the relMSE two independent draws score; the peak ratio's
@@ -117,7 +117,7 @@ def _rows(record) -> dict[str, dict]:
 
 @pytest.mark.method_target
 def test_exact_step_is_within_the_issues_bound(glass, record_property):
-    """Method target (issue 14, "Unbiased pipeline"): the exact step's caustic-region
+    """Method target ("unbiased pipeline"): the exact step's caustic-region
     relMSE is at most 0.01 at grid 128, for both presets' object frusta (measured
     against this fixture's reference: 0.00061 and 0.00065, expected noise floor
     0.00105; against the scene's full reference at 256²: 0.00087 and 0.00082, its
@@ -255,7 +255,7 @@ def test_compare_without_the_study_does_not_run_it(monkeypatch):
 
 
 def test_outputs_carry_the_decomposition(glass, tmp_path):
-    """A comparison carrying the record writes decomposition.csv (the issue's columns
+    """A comparison carrying the record writes decomposition.csv (the eight per-step columns
     first, the four steps in order), the record with its summary in metrics.json, and
     a report page with the section, its waterfall and the summary."""
     record = glass["paper"]
@@ -305,7 +305,7 @@ def test_compare_writes_the_decomposition(tmp_path):
 @pytest.mark.slow
 @pytest.mark.method_target
 def test_dense_exact_paths_reach_the_reference_noise_floor(tmp_path):
-    """Method target (issue 14, "Unbiased pipeline", step 0): exact paths on a
+    """Method target ("unbiased pipeline", step 0): exact paths on a
     jittered 1024² lattice, splatted by the method's passes, score within 2× the
     reference's noise floor measured against an independent reference of the same
     budget (measured 0.51× for both presets: what is left is reference noise)."""

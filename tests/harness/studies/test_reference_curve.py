@@ -1,5 +1,5 @@
 """The reference's error-versus-time curve (harness/studies/reference_curve.py),
-timed as the issue "What accuracy costs in time, like for like" asks: one compiled
+timed by the policy of docs/statistics.md ("Timing policy: warm and cold"): one compiled
 photon kernel for every budget, and warm times that grow with the budget."""
 
 from __future__ import annotations
@@ -52,9 +52,9 @@ def test_one_photon_kernel_serves_every_budget():
 def test_warm_curve_grows_with_the_budget():
     """Physical requirement: the photon tracer's work is proportional to the photons
     it traces, so once compilation and scene building are out of the warm time,
-    64 x the photons take at least 16 x the warm time (the issue's bound; the rest
-    is what a launch costs whatever its size). Before the fix the curve was flat
-    at about 0.5 s of one-off costs, which cold times now add to every budget
+    64 x the photons take at least 16 x the warm time (a quarter of the
+    proportional 64 x; the rest is what a launch costs whatever its size). Before the
+    fix the curve was flat at about 0.5 s of one-off costs, which cold times now add to every budget
     instead (build: the Mitsuba scene and its BVH, never free)."""
     scene = _glass_sphere()
     # The curve's error needs a reference: a converged-enough map from another seed.

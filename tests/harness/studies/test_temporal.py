@@ -50,7 +50,7 @@ def still():
 
 @pytest.mark.physical_requirement
 def test_a_still_scene_flickers_at_most_at_the_reference_noise_level(still):
-    """Physical requirement (issue 19): nothing moves, so the truth does not flicker,
+    """Physical requirement: nothing moves, so the truth does not flicker,
     and the measured flicker must stay at the reference's noise level.
 
     The noise level N is the flicker that reference noise alone makes between frames

@@ -1,4 +1,4 @@
-"""water_pool's animation at the scene's own settings (issue 19's "what it must show"):
+"""water_pool's animation at the scene's own settings (docs/architecture.md, "Temporal stability"):
 ``caustics compare water_pool --studies temporal --frames 24`` writes its table,
 flicker metrics and animation for both presets, and the strong preset flickers less
 than the paper preset. Slow: 2 × 24 reference frames of 2 M photons × 4 seeds (about

@@ -1,7 +1,7 @@
 """`caustics sweep` on a real Dask cluster: a `dask scheduler` and two `dask worker`
-processes on 127.0.0.1 (issue "Sweeps that outgrow one machine", "What it must
-show"): the results equal a single-process run with the same seeds and both workers
-rendered rows; a rerun computes nothing; a worker killed mid-sweep costs no row.
+processes on 127.0.0.1 (docs/architecture.md, "What the tests show"): the results
+equal a single-process run with the same seeds and both workers rendered rows; a
+rerun computes nothing; a worker killed mid-sweep costs no row.
 
 Tolerances. The photon tracer accumulates each receiver map with float32 atomic
 additions inside Dr.Jit's parallel scatter, whose order differs between any two runs

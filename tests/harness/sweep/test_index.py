@@ -1,4 +1,4 @@
-"""results.csv and the sweep's index page: the columns the issue names, the Pareto
+"""results.csv and the sweep's index page: the columns docs/architecture.md lists, the Pareto
 front per scene (known answers), every text from a file rendered inert."""
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ def test_pareto_front_per_scene_known_answers(tmp_path):
     (time ms, relMSE) (1, 0.5), (2, 0.3), (3, 0.4), (4, 0.1), (5, NaN) and a failed
     row: the front is (1, 0.5), (2, 0.3), (4, 0.1) ((3, 0.4) is dominated by (2,
     0.3)); scene b's one point (9, 0.9) is its own front although scene a has better
-    ones: fronts are per scene. results.csv has the issue's columns in order and
+    ones: fronts are per scene. results.csv has its documented columns in order and
     flags exactly those rows."""
     a = load_scene(small_scene(tmp_path, "glass_sphere"))
     b = load_scene(small_scene(tmp_path, "water_pool"))

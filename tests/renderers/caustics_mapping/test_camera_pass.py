@@ -1,4 +1,4 @@
-"""The camera pass's view of the caustic objects (issue 15 part 2): double
+"""The camera pass's view of the caustic objects (docs/method.md): double
 refraction through the camera-view back faces (Wyman 2005), the receiver hit from
 the light's positions atlas, TIR, Fresnel, absorption, dispersion and reflection.
 
@@ -29,7 +29,7 @@ from tests.conftest import SCENES
 
 #: Camera resolution of these checks: the sphere covers 848 interior pixels.
 CAMERA = (128, 128)
-#: Target tolerances of issue 15: black fraction of the sphere's pixels within 0.08
+#: Target tolerances (method_targets.toml): black fraction of the sphere's pixels within 0.08
 #: of the exact lens image's, mean radiance over them within 20 %.
 BLACK_TOLERANCE = 0.08
 MEAN_TOLERANCE = 0.20
@@ -100,13 +100,13 @@ _PAPER_DIRECTIONAL = pytest.mark.xfail(strict=True, reason=(
     pytest.param("dispersion_sphere", "paper", marks=_PAPER_DIRECTIONAL),
 ])
 def test_sphere_is_the_exact_lens_image(ctx, tmp_path, name, preset):
-    """Method target (issue 15): the sphere's pixels (``interior`` of the analytic
+    """Method target: the sphere's pixels (``interior`` of the analytic
     camera, 848 at 128²) are as often black, and on average as bright, as in the
     exact double refraction: black fraction within 0.08, mean luminance within 20 %
-    (the issue's numbers). Measured: glass_sphere strong 0.434 vs 0.430, ratio 0.998;
-    paper 0.383 vs 0.430, ratio 1.097 (its unverified hits shade some sky rays);
+    (harness/checks/data/method_targets.toml). Measured: glass_sphere strong 0.434 vs
+    0.430, ratio 0.998; paper 0.383 vs 0.430, ratio 1.097 (its unverified hits shade some sky rays);
     dispersion_sphere strong 0.426 vs 0.409, ratio 0.998. The single refraction to a
-    plane that this pass replaced drew the glass sphere 1.5 % black (issue 15)."""
+    plane that this pass replaced drew the glass sphere 1.5 % black."""
     black, exact_black, mean, where = _compare_sphere(
         ctx, _scene(name, preset=preset), tmp_path, f"{name}-{preset}")
     assert abs(black - exact_black) <= BLACK_TOLERANCE, (black, exact_black, str(where))
@@ -286,8 +286,8 @@ def test_one_bounce_shows_the_floor(ctx, tmp_path, name, preset):
     and a water surface (water_pool, L T D, IOR 1.33, radiance / n^2 into the air)
     against the exact trace of their chain at 128², shaded with the method's receiver
     map: of the pixels whose chain reaches the floor (ring 329 lit, pool 6832) at most
-    5 % are black, and their mean radiance is within 20 % of the exact (the issue's
-    bound). Measured strong: ring 0.6 % black, ratio 1.016; pool 0.6 %, 0.997 (without
+    5 % are black, and their mean radiance is within 20 % of the exact (the
+    targets' bounds). Measured strong: ring 0.6 % black, ratio 1.016; pool 0.6 %, 0.997 (without
     the 1 / n^2 factor the pool would be 1.77x). Rays that leave to the sky are black
     (at least 90 % of them; measured 100 %)."""
     shares, counts, ratio, where = _shares(ctx, _scene(name, preset=preset), tmp_path,

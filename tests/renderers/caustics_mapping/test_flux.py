@@ -9,7 +9,7 @@ the floor is E0 pi R^2 F, with F the share of parallel rays through an exact sph
 that land on the floor, traced here in closed form (:func:`floor_fraction`,
 F = 0.9678).
 
-Paper preset, threshold 5 % (the issue's bound before the Mitsuba reference
+Paper preset, threshold 5 % (the bound set before the Mitsuba reference
 existed); measured at grid 64: -0.15 % against E0 pi R^2 F, two errors cancelling
 (spurious TIR from nearest-texel exit normals loses flux, rays that pass the
 floor's edge are splatted anyway). Strong preset, threshold 0.5 %: the exact

@@ -22,11 +22,11 @@ from scenes import load_scene, parse_scene, with_settings
 from scenes.geometry import build_geometry
 from tests.conftest import SCENES
 
-#: Flux conservation of a splat kernel (issue "Caustic maps without an implementation
-#: error floor"): the receiver map holds the splatted vertices' flux to 1e-5. Measured
-#: at grid 96 (llvmpipe, float32 blending, float64 sums here): points 3e-8,
-#: footprint 5e-8, triangles 1.6e-6 (glass_sphere); the bunny lost one vertex's flux
-#: (1.5e-4) before over-thin footprint ellipses were kept at least half a pixel wide.
+#: Flux conservation of a splat kernel (docs/method.md, "Splat kernels"): the receiver
+#: map holds the splatted vertices' flux to 1e-5. Measured at grid 96 (llvmpipe, float32
+#: blending, float64 sums here): points 3e-8, footprint 5e-8, triangles 1.6e-6
+#: (glass_sphere); the bunny lost one vertex's flux (1.5e-4) before over-thin footprint
+#: ellipses were kept at least half a pixel wide.
 CONSERVATION = 1e-5
 
 
@@ -65,7 +65,7 @@ def test_every_splat_kernel_keeps_the_vertices_flux(ctx, name, splat):
 
 
 def test_tight_frustum_spends_twice_the_grid_on_the_bunny(ctx):
-    """Method target (issue: 4,753 of 128^2 grid vertices land on the bunny under the
+    """Method target (4,753 of 128^2 grid vertices land on the bunny under the
     square frustum around its bounding sphere; the tight one must at least double
     that). Measured: 4,753 -> 9,813 (2.06x)."""
     def on_object(frustum):
@@ -97,7 +97,7 @@ def test_grid_carries_the_light_through_the_sphere(ctx, frustum):
 
 def test_strong_sphere_has_no_spurious_tir_or_off_receiver_splats(ctx):
     """Physical requirement: light that enters a sphere always leaves it (the exit
-    angle equals the entry angle), so TIR flux is spurious; method target (issue):
+    angle equals the entry angle), so TIR flux is spurious; method target (method_targets.toml):
     spurious TIR and splats of rays whose exact path misses the floor each under
     0.1 % of the flux. Measured at these settings: TIR 0, off-receiver 0 (paper
     preset: 1.15 % and 0.95 %); at the default receiver map, TIR 0.008 %."""

@@ -2,8 +2,8 @@
 
 Physical requirement: the fraction of emitted caustic flux on paths that the
 safety cap stops (and, for the camera tracer, of its image's light) is recorded
-and is at most 1e-4 on every bundled scene (the bound
-the issue "The reference keeps all the light" sets). The check can fail: with the
+and is at most 1e-4 on every bundled scene (docs/reference.md, "Where a
+path stops"). The check can fail: with the
 old 8-event cap the bunny loses ~1.6e-2 (measured here with 2^20 photons), and the
 reference then warns, naming the scene and the fraction.
 """
@@ -70,7 +70,7 @@ def _small_camera(scene):
                          ids=lambda p: p.stem)
 def test_camera_cut_is_measured_and_negligible(path):
     """Physical requirement: the camera tracer (ptracer, all paths) loses at most
-    1e-4 of its image's light to the event cap (the issue's bound, as for the
+    1e-4 of its image's light to the event cap (the same bound as for the
     photon tracer), measured by the same seed rendered again with twice the cap."""
     scene = _small_camera(_all_paths(path))
     image = render_camera(scene, spp=CAMERA_SPP, seed=5)
