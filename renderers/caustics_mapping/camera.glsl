@@ -158,25 +158,11 @@ vec3 hit_radiance(vec3 y, vec3 n, int receiver) {
 }
 
 // T(x): the receiver the light sees through x, position t (w: receiver + 1) and
-// unit normal n, read as the caustic trace reads them; false where none is seen.
+// unit normal n, read as the caustic trace reads them (receiver_lookup, common.glsl);
+// false where none is seen.
 bool receiver_seen(vec3 x, out vec4 t, out vec3 n) {
-    int face;
-    vec2 ndc;
-    ivec2 texel;
-    t = vec4(0.0);
-    n = vec3(0.0);
-    if (!map_locate(x, u_positions_size, face, ndc, texel)) return false;
-    if (FILTERED == 1) {
-        Bilinear b = bilinear_at(u_positions, u_map_slot[face], u_positions_size,
-                                 (ndc * 0.5 + 0.5) * float(u_positions_size));
-        t = bilinear_read(u_positions, b);
-        n = bilinear_read(u_receiver_normals, b).xyz;
-        if (dot(n, n) > 0.0) n = normalize(n);
-    } else {
-        t = texelFetch(u_positions, texel, 0);
-        n = texelFetch(u_receiver_normals, texel, 0).xyz;
-    }
-    return t.w > 0.5;
+    return receiver_lookup(u_positions, u_receiver_normals, u_positions_size, FILTERED == 1,
+                           x, t, n);
 }
 
 // The verified hit's tolerance at p (normal n) without u_hit_tolerance: the

@@ -73,42 +73,18 @@ uniform int u_count;            // grid vertices (invocations past it do nothing
 
 #if defined VERTEX_SHADER || defined COMPUTE_SHADER
 
-// T(x): the receiver seen from the light through x; false when there is none.
-// `texel` is the atlas texel containing x's projection (the receiver normal and
-// (u, v) are read there, or blended like T when filtered).
-bool receiver_at(vec3 x, out vec4 t, out ivec2 texel) {
-    int face;
-    vec2 ndc;
-    t = vec4(0.0);
-    if (!map_locate(x, u_positions_size, face, ndc, texel)) return false;
-    if (u_filtered == 1) {
-        Bilinear b = bilinear_at(u_receiver_positions, u_map_slot[face], u_positions_size,
-                                 (ndc * 0.5 + 0.5) * float(u_positions_size));
-        t = bilinear_read(u_receiver_positions, b);
-    } else {
-        t = texelFetch(u_receiver_positions, texel, 0);
-    }
-    return t.w > 0.5;
-}
-
-// The receiver normal at x (x known to project onto a receiver texel).
-vec3 receiver_normal_at(vec3 x) {
-    int face;
-    vec2 ndc;
-    ivec2 texel;
-    map_locate(x, u_positions_size, face, ndc, texel);
-    if (u_filtered == 0) return texelFetch(u_receiver_normals, texel, 0).xyz;
-    Bilinear b = bilinear_at(u_receiver_positions, u_map_slot[face], u_positions_size,
-                             (ndc * 0.5 + 0.5) * float(u_positions_size));
-    vec3 n = bilinear_read(u_receiver_normals, b).xyz;
-    return dot(n, n) > 0.0 ? normalize(n) : n;
+// T(x) and the unit receiver normal n there (receiver_lookup, common.glsl); false
+// when no receiver is seen.
+bool receiver_at(vec3 x, out vec4 t, out vec3 n) {
+    return receiver_lookup(u_receiver_positions, u_receiver_normals, u_positions_size,
+                           u_filtered == 1, x, t, n);
 }
 
 // The estimators' surface 0 is the receiver positions atlas; each update's estimate
 // goes to the vertex's history (its first float at `record`).
 bool surface_at(int surface, vec3 x, out vec4 t) {
-    ivec2 texel;
-    return receiver_at(x, t, texel);
+    vec3 n;
+    return receiver_at(x, t, n);
 }
 
 void estimate_record(int record, int k, float d) {
@@ -125,19 +101,9 @@ bool back_at(vec3 x, int object, out vec3 p, out vec3 n) {
     p = vec3(0.0);
     n = vec3(0.0);
     if (!project(u_obj_vp[face], x, ndc)) return false;
-    vec2 pix = (ndc * 0.5 + 0.5) * float(u_back_size);
     vec4 q;
-    if (u_filtered == 1) {
-        Bilinear b = bilinear_at(u_back_positions, face, u_back_size, pix);
-        q = bilinear_read(u_back_positions, b);
-        n = bilinear_read(u_back_normals, b).xyz;
-        if (dot(n, n) > 0.0) n = normalize(n);
-    } else {
-        ivec2 t = min(ivec2(floor(pix)), ivec2(u_back_size - 1));
-        ivec2 a = ivec2(face * u_back_size + t.x, t.y);
-        q = texelFetch(u_back_positions, a, 0);
-        n = texelFetch(u_back_normals, a, 0).xyz;
-    }
+    surface_read(u_back_positions, u_back_normals, face, u_back_size,
+                 (ndc * 0.5 + 0.5) * float(u_back_size), u_filtered == 1, q, n);
     p = q.xyz;
     return abs(q.w - float(object + 1)) < 0.5;
 }
@@ -284,11 +250,11 @@ void main() {
     vec3 normal = vec3(0.0);
     if (status == STATUS_HIT) {
         vec4 t;
-        ivec2 texel;
-        bool seen = receiver_at(p, t, texel);
+        vec3 n_seen;
+        bool seen = receiver_at(p, t, n_seen);
         if (seen) {
             receiver = t.w - 1.0;
-            normal = receiver_normal_at(p);
+            normal = n_seen;
         }
         if (u_verify == 1) {
             float tol = u_hit_tolerance;

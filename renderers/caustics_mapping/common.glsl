@@ -181,6 +181,39 @@ vec4 bilinear_read(sampler2D tex, Bilinear b) {
     return r;
 }
 
+// A surface image read at face pixel coordinates `pix` of atlas slot `slot` (`size`
+// texels per side): `positions` RGBA32F (xyz m, w surface tag) into p, its companion
+// `normals` (xyz unit) into n. Nearest texel, or (`filtered`) bilinear within one
+// surface (bilinear_at) with the blended normal renormalised.
+void surface_read(sampler2D positions, sampler2D normals, int slot, int size, vec2 pix,
+                  bool filtered, out vec4 p, out vec3 n) {
+    if (filtered) {
+        Bilinear b = bilinear_at(positions, slot, size, pix);
+        p = bilinear_read(positions, b);
+        n = bilinear_read(normals, b).xyz;
+        if (dot(n, n) > 0.0) n = normalize(n);
+    } else {
+        ivec2 t = ivec2(slot * size, 0) + min(ivec2(floor(pix)), ivec2(size - 1));
+        p = texelFetch(positions, t, 0);
+        n = texelFetch(normals, t, 0).xyz;
+    }
+}
+
+// T(x): the receiver the light sees through x in the receiver positions atlas
+// `positions` (`size` texels per face; layout above), position t (w: receiver + 1)
+// and unit normal n from its companion `normals`; false where none is seen.
+bool receiver_lookup(sampler2D positions, sampler2D normals, int size, bool filtered, vec3 x,
+                     out vec4 t, out vec3 n) {
+    int face;
+    vec2 ndc;
+    t = vec4(0.0);
+    n = vec3(0.0);
+    if (!map_project(x, face, ndc)) return false;
+    surface_read(positions, normals, u_map_slot[face], size, (ndc * 0.5 + 0.5) * float(size),
+                 filtered, t, n);
+    return t.w > 0.5;
+}
+
 // Area (m^2) on the receiver covered by one caustic-map texel around hit x with
 // receiver normal n: the texel's solid angle times distance^2 (or its perpendicular
 // area) over |cos| between n and the light ray, the cosine clamped at 1e-3.
