@@ -1,0 +1,339 @@
+"""The method's own relMSE against the noise-free image, with its uncertainty.
+
+A real-time image M is scored against a Monte Carlo reference R, the mean of K seeds,
+whose per-texel, per-channel variance of the mean v is estimated from those seeds by
+v̂ (unbiased, K − 1 degrees of freedom). The raw relMSE of M against R mixes the
+method's error with the reference's noise: even the noise-free image T scores about
+mean w v. What the method is accountable for is its *excess* error
+
+    e = (1 / 3n) Σ_texels Σ_channels  w_T (M − T)²,      w_T = 1 / (T² + ε), ε = 0.01,
+
+over the n texels of the scored region (the relMSE of :mod:`harness.metrics.scores`
+with the noise-free image in place of the reference). e is conditional on the method
+image: M and T are fixed, the randomness is the reference's noise. A stochastic
+method's own noise is part of M and therefore part of its error.
+
+Estimators (per texel and channel; D = M − R, D' = M − R', derivatives of
+w(x) = 1 / (x² + ε) are w' = −2x / (x² + ε)², w'' = (6x² − 2ε) / (x² + ε)³)
+-------------------------------------------------------------------------------
+
+=================  ==========================================  ========================
+inputs             term                                        bias left
+=================  ==========================================  ========================
+R, v̂ ("taylor")    h(R) − ½ h''(R) v̂,  h(x) = w(x) (M − x)²    O(w' μ₃ + w v²/T²)
+R, v̂, R', v̂'       ½ [w̃(R') (D² − v̂) + w̃(R) (D'² − v̂')],      O(w v²/T²)
+("split")          w̃(X) = w(X) − ½ w''(X) v̂_X
+baseline           w(R) v̂ + w''(R) v̂² (K − 1)/(K + 1)            O(w' μ₃ + w v³/T⁴)
+=================  ==========================================  ========================
+
+Why: (M − R)² has expectation (M − T)² + v, so v̂ removes the noise, but a weight taken
+from the same noisy R correlates with its noise (E[w(R) (M − R)²] − w_T b² ≈
+−2 b w' v + ½ w'' b² v with b = M − T: 2 % of e for a 2 % bias at 1 % relative
+noise, growing as the noise does). The Taylor term removes it to second order: for
+h(x) = w(x)(M − x)², E[h(R)] = h(T) + ½ h''(T) v + O(μ₃), and E[h''(R) v̂] = h''(T) v +
+O(v²) because v̂ is independent of R (exactly so for Gaussian noise). The split term
+takes each weight from the *other*, independent reference, so weight and residual are
+independent and only the weight's curvature, E[w(X)] = w_T + ½ w'' v_X, needs the w̃
+correction; averaging both halves halves the noise. μ₃ is the third central moment of
+the reference's mean: for a photon count of N per texel it is ~T³/N², so the taylor
+term's bias is ~2/N² against a noise-only baseline of ~1/N, i.e. relatively 2/N.
+
+Standard error (model-based, not design-based): the spread of the per-texel terms over
+the region is the spread of the *bias pattern*, which is fixed, not noise; the
+variance that matters is that of the estimator under the reference's noise. Linearised
+in the noise η (variance v, Gaussian), a term is e_i + α η + β (η² − v) − β (v̂ − v) with
+α = h'(T), β = ½ h''(T) for taylor (α = ½ h'(T) on η and on η', β = ½ w on each for
+split), so
+
+    Var = α² v + 2 β² v² K / (K − 1)        (Var v̂ = 2 v² / (K − 1), Gaussian).
+
+At b = 0 this is the 2 v² (1 + 1/(K − 1)) of the brief's (M − R)² − v̂; at b ≠ 0 the
+4 b² v term dominates. The plug-in α(R)² overstates α² by h''² v (its own noise), a
+100 % error at b = 0, so it is subtracted, and products v̂ v̂ are divided by
+E[v̂ v̂] / (v v) = 1 + 2ρ² / (K − 1).
+
+Texels and channels: the photon tracer deposits each photon in the one texel its
+(u, v) falls in (nearest texel, ``renderers.mitsuba.photons``), so texels are
+independent. A texel's channels are one unit: a white or absorbed light's photons carry
+all three channels, so their noise is perfectly correlated (ρ = 1, the default); a
+dispersion scene traces one pass per channel (ρ = 0). Per texel the channels' terms are
+summed with covariance ρ α_c α_c' σ_c σ_c' + ρ² 2 β_c β_c' v_c v_c' K/(K − 1) (η² and v̂
+of two channels correlate as ρ²), then texels are summed.
+
+Interval: e ± t₀.₉₇₅(df) SE with Satterthwaite's df = (Σ V_i)² / Σ (V_i² / (K − 1))
+(K + K' − 2 with two references), i.e. normal unless a few texels carry the variance.
+``distinguishable`` when the 95 % interval excludes 0: above 0 the method is measurably
+off; an interval wholly below 0 cannot come from a method (e ≥ 0) and says the
+reference's variance is overstated.
+
+Region: the scored region must come from a reference *independent* of the one scored
+(:func:`scored_region`). A region thresholded on R itself keeps texels where R's noise
+happened to be high and drops those where it was low, so E[η | selected] ≠ 0 there and
+neither v̂ nor the weight corrections see it: the excess is biased by the selection.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import stdtrit
+
+from harness.metrics.scores import RELMSE_EPSILON, MetricInputError, relative_mse
+
+__all__ = ["ExcessError", "excess_relative_mse", "relmse_variance_terms", "scored_region"]
+
+#: Two-sided confidence of the reported interval.
+CONFIDENCE = 0.95
+
+
+@dataclass(frozen=True)
+class ExcessError:
+    """The method's relMSE, the reference noise's share of it, and the excess.
+
+    Attributes
+    ----------
+    value : float
+        Raw relMSE of the method against the reference (:func:`relative_mse`).
+    baseline : float
+        Expected raw relMSE of a perfect method (M = T) against this reference:
+        the reference noise's share of ``value``.
+    excess : float
+        Unbiased estimate of the method's relMSE against the noise-free image
+        (module docstring); may be slightly negative for a near-perfect method.
+    excess_stderr : float
+        Its model-based standard error (the reference's noise, not the bias pattern).
+    excess_ci95 : tuple of float
+        95 % interval (low, high), Student t with ``degrees_of_freedom``.
+    distinguishable : bool
+        The interval excludes 0 (above it: measurably off).
+    degrees_of_freedom : float
+        Satterthwaite degrees of freedom of the standard error.
+    estimator : str
+        ``"taylor"`` (one reference) or ``"split"`` (two independent references).
+    """
+
+    value: float
+    baseline: float
+    excess: float
+    excess_stderr: float
+    excess_ci95: tuple[float, float]
+    distinguishable: bool
+    degrees_of_freedom: float
+    estimator: str
+
+    def as_dict(self) -> dict:
+        """Plain JSON-able fields (the names users script against in metrics.json)."""
+        return {"value": self.value, "baseline": self.baseline, "excess": self.excess,
+                "excess_stderr": self.excess_stderr,
+                "excess_ci95": list(self.excess_ci95),
+                "distinguishable": self.distinguishable,
+                "degrees_of_freedom": self.degrees_of_freedom,
+                "estimator": self.estimator}
+
+
+def scored_region(method_region: np.ndarray, independent_region: np.ndarray) -> np.ndarray:
+    """The union of the method's region and an independent reference's region (H, W).
+
+    Neither region may be drawn from the reference being scored: thresholding that
+    reference keeps the texels its noise pushed up, which biases every noise
+    correction (module docstring). The method's own region is included so a caustic the
+    method puts where there is none is scored too.
+    """
+    a = np.asarray(method_region, bool)
+    b = np.asarray(independent_region, bool)
+    if a.shape != b.shape:
+        raise MetricInputError(f"region shapes differ: {a.shape} and {b.shape}")
+    return a | b
+
+
+# ---- weights and their derivatives ---------------------------------------------------
+
+
+def _w(x, eps):
+    return 1.0 / (x * x + eps)
+
+
+def _dw(x, eps):
+    return -2.0 * x / (x * x + eps) ** 2
+
+
+def _d2w(x, eps):
+    return (6.0 * x * x - 2.0 * eps) / (x * x + eps) ** 3
+
+
+def _d3w(x, eps):
+    return 24.0 * x * (eps - x * x) / (x * x + eps) ** 4
+
+
+def _d4w(x, eps):
+    x2 = x * x
+    return 24.0 * (5.0 * x2 * x2 - 10.0 * eps * x2 + eps * eps) / (x2 + eps) ** 5
+
+
+def _h_derivatives(method, x, eps):
+    """h(x) = w(x) (M − x)², its first, second and fourth derivatives in x
+    (Leibniz: (M − x)² has derivatives −2(M − x), 2, then 0)."""
+    d = method - x
+    w, dw, d2w = _w(x, eps), _dw(x, eps), _d2w(x, eps)
+    h = w * d * d
+    h1 = dw * d * d - 2.0 * w * d
+    h2 = d2w * d * d - 4.0 * dw * d + 2.0 * w
+    h4 = _d4w(x, eps) * d * d - 8.0 * _d3w(x, eps) * d + 12.0 * d2w
+    return h, h1, h2, h4
+
+
+def _channel_rho(channels: int, rho: float) -> np.ndarray:
+    """(C, C) correlation of the channels' noise: 1 on the diagonal, ρ elsewhere."""
+    r = np.full((channels, channels), float(rho))
+    np.fill_diagonal(r, 1.0)
+    return r
+
+
+def relmse_variance_terms(method, reference, variance, *, seeds: int,
+                          independent=None, independent_variance=None,
+                          independent_seeds: int | None = None,
+                          channel_correlation: float = 1.0,
+                          epsilon: float = RELMSE_EPSILON):
+    """Per-texel excess terms and their model variances (the parts of
+    :func:`excess_relative_mse`, exposed for maps and for pooling regions).
+
+    Returns
+    -------
+    terms : ndarray (H, W, C)
+        Per texel and channel unbiased estimates of w_T (M − T)².
+    texel_variance : ndarray (H, W)
+        Estimated variance of Σ_c terms at each texel (may be slightly negative
+        where the bias corrections exceed a tiny plug-in value; sums are what count).
+    baseline : ndarray (H, W, C)
+        Per texel and channel expected raw relMSE term of a perfect method.
+    dof_per_texel : int
+        Degrees of freedom of each texel's variance estimate.
+    """
+    m = np.asarray(method, np.float64)
+    r = np.asarray(reference, np.float64)
+    v = np.asarray(variance, np.float64)
+    if seeds < 2:
+        raise MetricInputError(f"a variance needs at least 2 seeds, got {seeds}")
+    if not 0.0 <= channel_correlation <= 1.0:
+        raise MetricInputError(f"channel_correlation must be in [0, 1], got "
+                               f"{channel_correlation}")
+    if v.shape != r.shape or m.shape != r.shape or r.ndim != 3:
+        raise MetricInputError(f"expected equal (H, W, C) arrays, got method {m.shape}, "
+                               f"reference {r.shape}, variance {v.shape}")
+    if (v < 0).any() or not np.isfinite(v).all():
+        raise MetricInputError("variance must be finite and non-negative")
+    k = float(seeds)
+    rho = _channel_rho(r.shape[2], channel_correlation)
+    rho2 = rho * rho
+    f = 1.0 + 2.0 * rho2 / (k - 1.0)  # E[v̂_c v̂_c'] / (v_c v_c'), Gaussian
+    vv = v[..., :, None] * v[..., None, :]
+    s = np.sqrt(v)
+    ss = s[..., :, None] * s[..., None, :]
+    baseline = _w(r, epsilon) * v + _d2w(r, epsilon) * v * v * (k - 1.0) / (k + 1.0)
+
+    if independent is None:
+        h, g, hh, h4 = _h_derivatives(m, r, epsilon)
+        # Second order removes ½ h'' v; the fourth-order remainder, E[h(R)] −
+        # E[½ h''(R) v̂] − h(T) = (1/24 − 1/4) h · 3v²/3 = −⅛ h v² (Gaussian
+        # μ₄ = 3v²), is added back with E[v̂²] = v² (K + 1)/(K − 1).
+        terms = h - 0.5 * hh * v + 0.125 * h4 * v * v * (k - 1.0) / (k + 1.0)
+        gg = g[..., :, None] * g[..., None, :]
+        hhhh = hh[..., :, None] * hh[..., None, :]
+        linear = gg * ss - rho * hhhh * vv / f
+        quadratic = 0.5 * hhhh * vv * k / ((k - 1.0) * f)
+        dof = seeds - 1
+    else:
+        if independent_variance is None:
+            raise MetricInputError("an independent reference needs its variance too")
+        r2 = np.asarray(independent, np.float64)
+        v2 = np.asarray(independent_variance, np.float64)
+        if r2.shape != r.shape or v2.shape != r.shape:
+            raise MetricInputError(f"independent reference {r2.shape} or its variance "
+                                   f"{v2.shape} differ from {r.shape}")
+        if (v2 < 0).any() or not np.isfinite(v2).all():
+            raise MetricInputError("independent variance must be finite and non-negative")
+        k2 = float(independent_seeds if independent_seeds is not None else seeds)
+        if k2 < 2:
+            raise MetricInputError(f"a variance needs at least 2 seeds, got {k2:g}")
+        f2 = 1.0 + 2.0 * rho2 / (k2 - 1.0)
+
+        def w_tilde(x, vx):
+            return _w(x, epsilon) - 0.5 * _d2w(x, epsilon) * vx
+
+        d, d2 = m - r, m - r2
+        terms = 0.5 * (w_tilde(r2, v2) * (d * d - v) + w_tilde(r, v) * (d2 * d2 - v2))
+        mean_ref = 0.5 * (r + r2)
+        _, g, hh, _ = _h_derivatives(m, mean_ref, epsilon)
+        g = 0.5 * g  # coefficient of η and of η'
+        s2 = np.sqrt(v2)
+        ss2 = s2[..., :, None] * s2[..., None, :]
+        vv2 = v2[..., :, None] * v2[..., None, :]
+        gg = g[..., :, None] * g[..., None, :]
+        hhhh = hh[..., :, None] * hh[..., None, :]
+        # Var of the mean reference's noise, squared: ((σσ + σ'σ') / 4)², estimated
+        # without the bias of v̂ v̂ and v̂' v̂'.
+        mean_noise2 = (vv / f + 2.0 * ss * ss2 + vv2 / f2) / 16.0
+        linear = gg * (ss + ss2) - rho * hhhh * mean_noise2
+        w = _w(mean_ref, epsilon)
+        ww = w[..., :, None] * w[..., None, :]
+        quadratic = 0.5 * ww * (vv * k / ((k - 1.0) * f) + vv2 * k2 / ((k2 - 1.0) * f2))
+        dof = seeds + int(k2) - 2
+    texel_variance = np.einsum("...cd,cd->...", linear, rho) + np.einsum(
+        "...cd,cd->...", quadratic, rho2)
+    return terms, texel_variance, baseline, dof
+
+
+def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
+                        independent=None, independent_variance=None,
+                        independent_seeds: int | None = None,
+                        channel_correlation: float = 1.0,
+                        epsilon: float = RELMSE_EPSILON) -> ExcessError:
+    """The method's relMSE against the noise-free image, unbiased, with its standard
+    error and 95 % interval (module docstring).
+
+    Parameters
+    ----------
+    method, reference : ndarray (H, W, 3)
+        The method's image and the K-seed reference mean, same linear units.
+    variance : ndarray (H, W, 3)
+        Unbiased estimate of the variance of the reference's mean, per channel
+        (squared image units), from its ``seeds`` seeds.
+    seeds : int
+        K, the seeds behind ``variance`` (its degrees of freedom are K − 1).
+    mask : ndarray (H, W) of bool, optional
+        The scored region; it must not be derived from ``reference``
+        (:func:`scored_region`). Default: every texel.
+    independent, independent_variance : ndarray (H, W, 3), optional
+        A second reference on disjoint seeds and its variance of the mean: the split
+        estimator (half the variance, no third-moment bias).
+    independent_seeds : int, optional
+        Its seeds (default ``seeds``).
+    channel_correlation : float
+        Correlation of one texel's channel noises: 1 when the same photons carry all
+        three channels (white or absorbed light), 0 for one pass per channel
+        (dispersion).
+    epsilon : float
+        relMSE's regulariser (squared image units).
+    """
+    value = relative_mse(method, reference, mask=mask, epsilon=epsilon)
+    terms, texel_var, baseline, dof = relmse_variance_terms(
+        method, reference, variance, seeds=seeds, independent=independent,
+        independent_variance=independent_variance, independent_seeds=independent_seeds,
+        channel_correlation=channel_correlation, epsilon=epsilon)
+    sel = np.ones(terms.shape[:2], bool) if mask is None else np.asarray(mask, bool)
+    count = terms[sel].size  # texels x channels, as relMSE averages
+    excess = float(terms[sel].sum()) / count
+    texel_var = texel_var[sel]
+    total = float(texel_var.sum())
+    stderr = float(np.sqrt(max(total, 0.0))) / count
+    spread = float(np.sum(texel_var**2))
+    df = total**2 / (spread / dof) if spread > 0 and total > 0 else float("inf")
+    half = float(stdtrit(df, 0.5 + CONFIDENCE / 2)) * stderr
+    low, high = excess - half, excess + half
+    return ExcessError(
+        value=value, baseline=float(baseline[sel].sum()) / count, excess=excess,
+        excess_stderr=stderr, excess_ci95=(low, high),
+        distinguishable=bool(stderr > 0 and (low > 0 or high < 0)),
+        degrees_of_freedom=float(df),
+        estimator="taylor" if independent is None else "split")
