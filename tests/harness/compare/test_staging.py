@@ -10,6 +10,7 @@ import time
 import pytest
 
 from harness.compare.staging import MARKER, STALE_SECONDS, staged_output
+from scenes.files import process_umask
 
 
 def _previous_run(out):
@@ -51,9 +52,7 @@ def test_finished_run_replaces_the_old_output_whole(tmp_path):
     assert not (out / "scene-paper").exists()
     assert (out / MARKER).is_file()
     assert _siblings(out) == []
-    umask = os.umask(0)
-    os.umask(umask)
-    assert stat.S_IMODE(out.stat().st_mode) == 0o777 & ~umask
+    assert stat.S_IMODE(out.stat().st_mode) == 0o777 & ~process_umask()
 
 
 def test_a_folder_of_other_files_is_written_in_place_not_replaced(tmp_path, capsys):
