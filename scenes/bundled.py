@@ -14,7 +14,7 @@ from pathlib import Path
 from scenes.schema import Problem, SceneError
 
 __all__ = ["DEFAULT_SCENE", "SCENES_DIR", "bundled_scene_names", "default_scene_path",
-           "resolve_scene"]
+           "resolve_bundled", "resolve_scene"]
 
 #: Folder of the bundled scene files (the ``scenes`` package itself).
 SCENES_DIR = Path(str(resources.files("scenes")))
@@ -34,22 +34,39 @@ def default_scene_path() -> Path:
     return SCENES_DIR / f"{DEFAULT_SCENE}.toml"
 
 
+def resolve_bundled(argument: str | Path, folders: tuple[Path, ...], *, kind: str,
+                    names: tuple[str, ...], error: type[SceneError] = SceneError) -> Path:
+    """The file an argument names: an existing path, else the bundled ``<name>.toml``
+    (``name`` the argument less any ``.toml``) found first under ``folders``, as a
+    file of one of them (``hard/grazing_light`` is the file of ``SCENES_DIR / "hard"``;
+    a name that leads into any other folder finds nothing).
+
+    Raises
+    ------
+    SceneError
+        (``error``, a subclass) Neither a file nor a bundled ``kind``; the message
+        lists ``names``, the bundled names.
+    """
+    path = Path(argument)
+    if path.is_file():
+        return path
+    name = str(argument).removesuffix(".toml")
+    for folder in folders:
+        candidate = folder / f"{name}.toml"
+        if candidate.parent in folders and candidate.is_file():
+            return candidate
+    raise error([Problem(str(argument), "", f"no such file, and no bundled {kind} of that "
+                         f"name (bundled: {', '.join(names) or 'none'})")])
+
+
 def resolve_scene(argument: str | Path) -> Path:
-    """The scene file an argument names: an existing path, else a bundled name.
+    """The scene file an argument names: an existing path, else a bundled name
+    (``glass_sphere``, ``hard/grazing_light`` or ``grazing_light``).
 
     Raises
     ------
     SceneError
         Neither a file nor a bundled scene; the message lists the bundled names.
     """
-    path = Path(argument)
-    if path.is_file():
-        return path
-    name = str(argument).removesuffix(".toml")
-    for candidate in (SCENES_DIR / f"{name}.toml", SCENES_DIR / "hard" / f"{name}.toml"):
-        if "/" not in name.removeprefix("hard/") and candidate.is_file():
-            return candidate
-    names = ", ".join(bundled_scene_names())
-    raise SceneError([Problem(str(argument), "",
-                              f"no such file, and no bundled scene of that name "
-                              f"(bundled: {names})")])
+    return resolve_bundled(argument, (SCENES_DIR, SCENES_DIR / "hard"), kind="scene",
+                           names=bundled_scene_names())

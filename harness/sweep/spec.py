@@ -40,6 +40,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import tomllib
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar, Literal
@@ -55,6 +56,7 @@ from scenes import (
     resolve_scene,
     with_settings,
 )
+from scenes.bundled import resolve_bundled
 from scenes.geometry import build_geometry, scene_warnings
 from scenes.schema import build, spec
 
@@ -256,40 +258,40 @@ def _check_value(key: str, value: Any, *, file: str, path: str,
     return getattr(built, _settings_fields()[key].name)
 
 
-def _settings_table(table: Any, *, file: str, problems: list[Problem]) -> tuple:
-    """``[sweep.settings]``: fixed overrides, each checked as a scene's setting."""
+def _setting_entries(table: Any, name: str, *, file: str,
+                     problems: list[Problem]) -> Iterator[tuple[str, str, Any]]:
+    """(key, path, value) of each entry of ``[sweep.<name>]`` whose key a sweep may
+    set there; a table that is not one, an unknown key and a key refused in this
+    table each add their problem instead."""
     if not isinstance(table, dict):
-        problems.append(Problem(file, "sweep.settings", "expected a table"))
-        return ()
-    known, out = _settings_fields(), []
+        problems.append(Problem(file, f"sweep.{name}", "expected a table"))
+        return
+    known = _settings_fields()
     for key, value in table.items():
-        path = f"sweep.settings.{key}"
+        path = f"sweep.{name}.{key}"
         if key not in known:
             problems.append(Problem(file, path, _unknown_setting()))
-        elif (why := _refused(key, "settings")) is not None:
+        elif (why := _refused(key, name)) is not None:
             problems.append(Problem(file, path, why))
         else:
-            converted = _check_value(key, value, file=file, path=path, problems=problems)
-            if converted is not None:
-                out.append((key, converted))
+            yield key, path, value
+
+
+def _settings_table(table: Any, *, file: str, problems: list[Problem]) -> tuple:
+    """``[sweep.settings]``: fixed overrides, each checked as a scene's setting."""
+    out = []
+    for key, path, value in _setting_entries(table, "settings", file=file, problems=problems):
+        converted = _check_value(key, value, file=file, path=path, problems=problems)
+        if converted is not None:
+            out.append((key, converted))
     return tuple(out)
 
 
 def _grid_table(table: Any, *, file: str, problems: list[Problem]) -> tuple:
     """``[sweep.grid]``: each key a setting, each value a non-empty array of values
     that setting takes; every value checked and named by its index."""
-    if not isinstance(table, dict):
-        problems.append(Problem(file, "sweep.grid", "expected a table"))
-        return ()
-    known, out = _settings_fields(), []
-    for key, values in table.items():
-        path = f"sweep.grid.{key}"
-        if key not in known:
-            problems.append(Problem(file, path, _unknown_setting()))
-            continue
-        if (why := _refused(key, "grid")) is not None:
-            problems.append(Problem(file, path, why))
-            continue
+    out = []
+    for key, path, values in _setting_entries(table, "grid", file=file, problems=problems):
         if not isinstance(values, list) or not values:
             problems.append(Problem(file, path, "expected a non-empty array of values "
                                     f"(e.g. {key} = [a, b])"))
@@ -408,16 +410,8 @@ def resolve_sweep(argument: str | Path) -> Path:
     SweepFileError
         Neither a file nor a bundled sweep; the message lists the bundled names.
     """
-    path = Path(argument)
-    if path.is_file():
-        return path
-    name = str(argument).removesuffix(".toml")
-    candidate = SWEEPS_DIR / f"{name}.toml"
-    if "/" not in name and candidate.is_file():
-        return candidate
-    names = ", ".join(bundled_sweep_names()) or "none"
-    raise SweepFileError([Problem(str(argument), "", "no such file, and no bundled sweep of "
-                                  f"that name (bundled: {names})")])
+    return resolve_bundled(argument, (SWEEPS_DIR,), kind="sweep",
+                           names=bundled_sweep_names(), error=SweepFileError)
 
 
 def load_sweep(path: str | Path) -> Sweep:
