@@ -79,7 +79,7 @@ def process_umask() -> int:
     Linux: the ``Umask:`` line of ``/proc/self/status``. Elsewhere (or on a kernel
     older than 4.7): the bits the kernel clears from a probe file created with mode
     0777. Either way it is read on every call, so a umask the program changes later
-    is followed; ``os.umask`` is never called (see the module docstring).
+    is followed; the umask itself is never set (see the module docstring).
 
     Returns
     -------

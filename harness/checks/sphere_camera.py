@@ -2,13 +2,13 @@
 of both renderers (the camera requirements and targets of ``compare``, and the
 renderers' camera tests).
 
-Everything is closed-form ray geometry, written here and independent of both
-renderers' code: primary rays through stratified subpixel positions, ray–sphere
-intersection of the *ideal* sphere (not its icosphere), Snell refraction in at
-the front and out at the back (no total internal reflection can occur: a ray that
-enters a sphere leaves it at the angle it entered), and the exit ray's hit on
-the receiver plane. The receiver is shaded like the radiometric contract's
-Lambertian receiver::
+Everything is closed-form ray geometry, independent of both renderers' code:
+primary rays of the scene's pinhole (:mod:`scenes.camera`) through stratified
+subpixel positions and, written here, ray–sphere intersection of the *ideal*
+sphere (not its icosphere), Snell refraction in at the front and out at the back
+(no total internal reflection can occur: a ray that enters a sphere leaves it at
+the angle it entered), and the exit ray's hit on the receiver plane. The receiver
+is shaded like the radiometric contract's Lambertian receiver::
 
     L = albedo / pi * (E_direct * V + E_caustic)
 
