@@ -16,7 +16,7 @@ import numpy as np
 from renderers.caustics_mapping.context import ResourcePool, load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.meshes import GpuMesh
-from renderers.caustics_mapping.uniforms import set_light_uniforms
+from renderers.caustics_mapping.uniforms import map_view_passes
 
 __all__ = ["ReceiverPositions", "render_receiver_positions"]
 
@@ -54,15 +54,8 @@ def render_receiver_positions(
     depth = resources.depth_texture((width, size))
     fbo = resources.framebuffer(textures, depth)
     program = load_program(ctx, "receiver_positions.glsl")
-    set_light_uniforms(program, light)
-    fbo.use()
-    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-    ctx.enable(moderngl.DEPTH_TEST)
-    ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
     vaos = [mesh.vertex_array(program) for mesh in receivers]
-    for slot, face in enumerate(light.map_faces):
-        fbo.viewport = (slot * size, 0, size, size)
-        program["u_vp"].write(light.map_views[face].view_proj.T.astype("f4").tobytes())
+    for _ in map_view_passes(ctx, fbo, program, light, size=size):
         for index, vao in enumerate(vaos):
             program["u_index"] = index
             vao.render(moderngl.TRIANGLES)

@@ -11,7 +11,7 @@ import moderngl
 from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.meshes import GpuMesh, back_faces_hidden
-from renderers.caustics_mapping.uniforms import set_light_uniforms
+from renderers.caustics_mapping.uniforms import map_view_passes
 
 __all__ = ["render_shadow_map"]
 
@@ -28,16 +28,9 @@ def render_shadow_map(
     depth = resources.depth_texture((views * size, size))
     fbo = resources.framebuffer([target], depth)
     program = load_program(ctx, "shadow_map.glsl")
-    set_light_uniforms(program, light)
-    fbo.use()
-    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-    ctx.enable(moderngl.DEPTH_TEST)
-    ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
     vaos = [mesh.vertex_array(program) for mesh in objects]
-    for slot, face in enumerate(light.map_faces):
-        fbo.viewport = (slot * size, 0, size, size)
-        view_proj = light.map_views[face].view_proj
-        program["u_vp"].write(view_proj.T.astype("f4").tobytes())
+    for view in map_view_passes(ctx, fbo, program, light, size=size):
+        view_proj = view.view_proj
         for mesh, vao in zip(objects, vaos, strict=True):
             # Never for an open mesh (water, rings, a mesh that is not watertight:
             # ``closed`` false, the ``open_mesh`` effect): the light sees its inner

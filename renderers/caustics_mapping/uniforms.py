@@ -1,13 +1,17 @@
-"""Setting the uniforms shared through ``common.glsl`` (light and view matrices)."""
+"""Setting the uniforms shared through ``common.glsl`` (light and view matrices) and
+``mesh_vertex.glsl`` (``u_vp``), and the loop of the passes drawn into the light's
+map views."""
 
 from __future__ import annotations
+
+from collections.abc import Iterator
 
 import moderngl
 import numpy as np
 
 from renderers.caustics_mapping.lights import LightSetup, LightView
 
-__all__ = ["set_light_uniforms", "set_object_view_uniforms", "set_uniform"]
+__all__ = ["map_view_passes", "set_light_uniforms", "set_object_view_uniforms", "set_uniform"]
 
 
 def set_uniform(program: moderngl.Program, name: str, value) -> None:
@@ -51,3 +55,27 @@ def set_object_view_uniforms(program: moderngl.Program, light: LightSetup) -> No
     set_uniform(program, "u_obj_views", len(views))
     set_uniform(program, "u_obj_persp", int(views[0].perspective))
     set_uniform(program, "u_obj_rect", tuple(float(x) for x in views[0].bounds))
+
+
+def map_view_passes(
+    ctx: moderngl.Context, fbo: moderngl.Framebuffer, program: moderngl.Program,
+    light: LightSetup, *, size: int,
+) -> Iterator[LightView]:
+    """Draw with ``program`` into each stored map view of ``light`` in turn.
+
+    Sets the light uniforms, binds ``fbo`` and clears it (colour 0, depth 1), and
+    enables the depth test with face culling and blending off. Then, for each view of
+    ``light.map_faces`` (atlas slot s holds the s-th), sets the viewport to that slot
+    (``size`` texels a side, x from s * size) and ``u_vp`` to the view's world -> clip
+    matrix, and yields the view for the caller to draw its meshes.
+    """
+    set_light_uniforms(program, light)
+    fbo.use()
+    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+    ctx.enable(moderngl.DEPTH_TEST)
+    ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
+    for slot, face in enumerate(light.map_faces):
+        view = light.map_views[face]
+        fbo.viewport = (slot * size, 0, size, size)
+        program["u_vp"].write(view.view_proj.T.astype("f4").tobytes())
+        yield view
