@@ -29,19 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenes.geometry.mesh import transform_matrix
-from scenes.model import (
-    Animation,
-    AreaLight,
-    DirectionalLight,
-    MeshObject,
-    PointLight,
-    RingObject,
-    Scene,
-    SphereObject,
-    SpotLight,
-    Transform,
-    WaterSurface,
-)
+from scenes.model import Animation, MeshObject, Scene, Transform, WaterSurface
 from scenes.schema import Problem, SceneError
 
 __all__ = ["AnimationFrame", "animation_frames", "animation_of", "scene_at"]
@@ -96,20 +84,30 @@ def _moved(point, velocity, tau: float) -> tuple[float, float, float]:
     return tuple(float(p + v * tau) for p, v in zip(point, velocity, strict=True))
 
 
+#: Per light kind: the field a velocity moves and the field an angular velocity
+#: turns (None where the light has no position or no direction).
+_LIGHT_MOTION = {"point": ("position", None), "spot": ("position", "direction"),
+                 "directional": (None, "direction"), "area": ("center", "normal")}
+#: The same per object kind; a mesh moves and turns its transform instead.
+_OBJECT_MOTION = {"sphere": ("center", None), "water_surface": ("center", None),
+                  "ring": ("center", "axis")}
+
+
+def _moved_node(node, fields: tuple[str | None, str | None], velocity, angles, tau: float):
+    """``node`` with its ``fields`` (moved, turned) at τ = ``tau``."""
+    moves, turns = fields
+    changes = {}
+    if moves is not None:
+        changes[moves] = _moved(getattr(node, moves), velocity, tau)
+    if turns is not None:
+        changes[turns] = _turn(getattr(node, turns), angles)
+    return dataclasses.replace(node, **changes)
+
+
 def _light_at(light, animation: Animation, tau: float):
     motion = animation.light
-    velocity, angles = motion.velocity, tuple(w * tau for w in motion.angular_velocity)
-    if isinstance(light, PointLight):
-        return dataclasses.replace(light, position=_moved(light.position, velocity, tau))
-    if isinstance(light, SpotLight):
-        return dataclasses.replace(light, position=_moved(light.position, velocity, tau),
-                                   direction=_turn(light.direction, angles))
-    if isinstance(light, DirectionalLight):
-        return dataclasses.replace(light, direction=_turn(light.direction, angles))
-    if isinstance(light, AreaLight):
-        return dataclasses.replace(light, center=_moved(light.center, velocity, tau),
-                                   normal=_turn(light.normal, angles))
-    raise TypeError(f"unknown light {type(light).__name__}")  # a bug in the model
+    angles = tuple(w * tau for w in motion.angular_velocity)
+    return _moved_node(light, _LIGHT_MOTION[type(light).kind], motion.velocity, angles, tau)
 
 
 def _object_at(obj, motion, tau: float):
@@ -119,18 +117,13 @@ def _object_at(obj, motion, tau: float):
         return obj
     velocity = motion.velocity
     angles = tuple(w * tau for w in motion.angular_velocity)
-    if isinstance(obj, (SphereObject, WaterSurface)):
-        return dataclasses.replace(obj, center=_moved(obj.center, velocity, tau))
-    if isinstance(obj, RingObject):
-        return dataclasses.replace(obj, center=_moved(obj.center, velocity, tau),
-                                   axis=_turn(obj.axis, angles))
     if isinstance(obj, MeshObject):
         t = obj.transform
         transform = dataclasses.replace(
             t, translate=_moved(t.translate, velocity, tau),
             rotate=tuple(float(r + a) for r, a in zip(t.rotate, angles, strict=True)))
         return dataclasses.replace(obj, transform=transform)
-    raise TypeError(f"unknown object {type(obj).__name__}")  # a bug in the model
+    return _moved_node(obj, _OBJECT_MOTION[type(obj).kind], velocity, angles, tau)
 
 
 def scene_at(scene: Scene, tau: float, *, animation: Animation | None = None) -> Scene:

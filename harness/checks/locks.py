@@ -38,12 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.checks.bounds import Bound, check_locks
-from harness.checks.golden import (
-    GOLDEN_SETTINGS,
-    golden_scene,
-    load_golden,
-    read_manifest,
-)
+from harness.checks.golden import GOLDEN_SETTINGS, golden_scene, load_golden, read_manifest
 from harness.compare.evaluate import exposure_for, score_value
 from harness.compare.regions import caustic_region
 from renderers.caustics_mapping import render
