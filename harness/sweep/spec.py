@@ -348,16 +348,10 @@ def _methods(table: SweepTable, *, file: str, problems: list[Problem]) -> tuple[
 
 
 def parse_sweep(text: str, *, file: str = "<string>", base_dir: Path | None = None) -> Sweep:
-    """Parse and validate sweep-file text (see the module docstring).
-
-    Parameters
-    ----------
-    text
-        TOML source.
-    file
-        Name used in every problem and recorded as ``Sweep.file``.
-    base_dir
-        Folder that scene paths are relative to (default: the current one).
+    """Parse and validate sweep-file ``text`` (TOML; see the module docstring), as
+    :func:`scenes.parse_scene` parses a scene's: ``file`` names the text in every
+    problem and is recorded as ``Sweep.file``; scene paths are relative to
+    ``base_dir`` (default: the current folder).
 
     Raises
     ------
