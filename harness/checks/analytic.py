@@ -34,12 +34,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scenes import Scene
 from scenes.model import (
     DielectricMaterial,
     DirectionalLight,
     PlaneReceiver,
     PointLight,
-    Scene,
     SphereObject,
 )
 
