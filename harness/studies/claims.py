@@ -70,8 +70,8 @@ from reports.records import ClaimVerdict
 __all__ = ["BOOTSTRAP_DRAWS", "FIVE_ITERATIONS", "NEGLIGIBLE_TEXELS", "ONE_ITERATION",
            "ONE_ITERATION_MARGIN", "UNDECIDED_SIGMAS", "check_five_iterations",
            "check_one_iteration", "claim_verdict", "five_iterations_verdict",
-           "one_iteration_verdict", "paper_claims", "percentile_standard_error",
-           "ratio_standard_error"]
+           "hit_errors_texels", "one_iteration_verdict", "paper_claims",
+           "percentile_standard_error", "ratio_standard_error"]
 
 NEGLIGIBLE_TEXELS = 1.0
 ONE_ITERATION_MARGIN = 0.10
@@ -217,7 +217,7 @@ def percentile_standard_error(values: np.ndarray, *, percentile: float = 95.0,
     return float(np.std(np.fromiter(picks, float, draws), ddof=1))
 
 
-def _hit_errors_texels(runner, iterations: int) -> np.ndarray:
+def hit_errors_texels(runner, iterations: int) -> np.ndarray:
     """Per-ray hit-distance errors (texels) of the modified estimator after
     ``iterations``: the rays and the definition the convergence table's p95 uses
     (:func:`harness.studies.convergence.iteration_stats`)."""
@@ -257,7 +257,7 @@ def paper_claims(convergence, *, runner=None, reference=None, caustic=None
     five_se = ratio_se = None
     if runner is not None:
         if 5 in p95:
-            five_se = percentile_standard_error(_hit_errors_texels(runner, 5))
+            five_se = percentile_standard_error(hit_errors_texels(runner, 5))
         variance = getattr(reference, "variance", None)
         if 1 in relmse and len(relmse) > 1 and variance is not None and caustic is not None:
             maps = [runner.render(estimator="modified", safeguarded=False,

@@ -3,6 +3,7 @@ products the renderers form) are errors naming the field, and so is a dark light
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from scenes import SceneError, load_scene
@@ -118,4 +119,15 @@ def test_bundled_scenes_are_within_limits():
     the limit refuses no bundled scene."""
     for path in all_scene_files():
         load_scene(path)
-    assert LENGTH_LIMIT == 1e18
+
+
+def test_length_limit_keeps_squared_distances_finite_in_float32():
+    """The limit's reason (scenes.precision): two points ``LENGTH_LIMIT`` out on
+    opposite corners are 2 sqrt(3) LENGTH_LIMIT apart, and that distance squared
+    (1.2e37 at 1e18 m) is still finite in float32; ten times the limit out it
+    overflows (1.2e39 > 3.4e38, float32's largest)."""
+    for reach, finite in ((LENGTH_LIMIT, True), (10 * LENGTH_LIMIT, False)):
+        corner = np.full(3, reach, np.float32)
+        gap = corner - (-corner)
+        with np.errstate(over="ignore"):
+            assert bool(np.isfinite(np.dot(gap, gap))) is finite

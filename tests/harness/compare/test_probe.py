@@ -10,8 +10,12 @@ import numpy as np
 
 from harness.cli import main
 from harness.compare.probe import PROBE_PHOTONS, probe_caustic
-from tests.renderers.mitsuba.scenes import glass_sphere, make_scene
-from tests.renderers.mitsuba.test_analytic import _ideal_sphere_paths, _inradius_deficit
+from tests.renderers.mitsuba.scenes import (
+    glass_sphere,
+    ideal_sphere_paths,
+    inradius_deficit,
+    make_scene,
+)
 
 #: Probe runs with distinct seeds, for the probe's own standard error.
 SEEDS = 4
@@ -32,9 +36,9 @@ def test_probe_flux_is_the_analytic_sphere_flux():
                        receiver_size=3.0, direct=False)
     fluxes = np.array([probe_caustic(scene, seed=s).caustic_flux_w for s in range(SEEDS)])
     mean, se = fluxes.mean(), fluxes.std(ddof=1) / np.sqrt(SEEDS)
-    lands, _ = _ideal_sphere_paths(1.0, 2.0, 1.5, 1.5)
+    lands, _ = ideal_sphere_paths(1.0, 2.0, 1.5, 1.5)
     expected = 3 * e0 * np.pi * lands.mean()
-    deficit = _inradius_deficit(scene)
+    deficit = inradius_deficit(scene)
     print(f"probe flux {mean:.4f} ± {se:.4f} W vs expected {expected:.4f} W "
           f"({PROBE_PHOTONS} photons x {SEEDS} seeds)")
     assert abs(mean - expected) < 4 * se + deficit * expected

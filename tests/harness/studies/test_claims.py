@@ -10,11 +10,10 @@ import pytest
 
 from harness.compare.regions import caustic_region
 from harness.studies.claims import (
-    UNDECIDED_SIGMAS,
-    _hit_errors_texels,
     check_five_iterations,
     check_one_iteration,
     claim_verdict,
+    hit_errors_texels,
     one_iteration_verdict,
     paper_claims,
     percentile_standard_error,
@@ -57,7 +56,6 @@ def test_one_iteration_both_ways():
 def test_verdict_rule_on_hand_computed_margins(value, se, verdict):
     """Regression lock of the rule in harness/studies/claims.py (hand-computed cases
     against the bound 1.10): undecided exactly when |bound - value| < 2σ."""
-    assert UNDECIDED_SIGMAS == 2.0
     assert claim_verdict(value, 1.10, se) == verdict
 
 
@@ -140,7 +138,7 @@ def test_claims_on_a_real_render_use_the_tables_numbers():
                                   configs=(("modified", False),))
         claims, (five, one) = paper_claims(table, runner=runner, reference=reference,
                                            caustic=caustic)
-        errors = _hit_errors_texels(runner, 5)
+        errors = hit_errors_texels(runner, 5)
     rows = {r["iteration"]: r for r in table.records()}
     print(five.text, one.text, sep="\n")
     assert set(claims) == {five.claim, one.claim}

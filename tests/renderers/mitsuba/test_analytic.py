@@ -14,8 +14,13 @@ import numpy as np
 
 from renderers.mitsuba.reference import estimate_receivers
 from renderers.results import texel_centers
-from scenes.geometry import build_geometry
-from tests.renderers.mitsuba.scenes import FAR_SPHERE, glass_sphere, make_scene
+from tests.renderers.mitsuba.scenes import (
+    FAR_SPHERE,
+    glass_sphere,
+    ideal_sphere_paths,
+    inradius_deficit,
+    make_scene,
+)
 
 K = 4
 RES = (16, 16)
@@ -69,46 +74,10 @@ def test_point_light_gives_i_cos_over_r2():
     assert np.abs(z).max() < 5
 
 
-def _ideal_sphere_paths(radius, height, ior, half, n=1500):
-    """Rays straight down through an ideal sphere (ray optics, NumPy): returns the
-    equal-area impact samples' (lands on the |x|,|y| <= half receiver) mask and
-    chord length inside. Midpoint rule in b^2 and in azimuth: n x n/2 samples."""
-    b = radius * np.sqrt((np.arange(n) + 0.5) / n)
-    phi = 2 * np.pi * (np.arange(n // 2) + 0.5) / (n // 2)
-    bb, pp = np.meshgrid(b, phi)
-    x0, y0 = bb * np.cos(pp), bb * np.sin(pp)
-    sin_i = bb / radius
-    sin_t = sin_i / ior
-    theta = 2 * (np.arcsin(sin_i) - np.arcsin(sin_t))  # deviation after two refractions
-    chord = 2 * radius * np.sqrt(1 - sin_t**2)
-    # Exit point: rotate the entry point by (pi - 2 theta_t) in the meridian plane.
-    ti, tt = np.arcsin(sin_i), np.arcsin(sin_t)
-    alpha = ti + (np.pi - 2 * tt)  # polar angle of exit point from +z
-    r_exit, z_exit = radius * np.sin(alpha), height + radius * np.cos(alpha)
-    # Direction leaves tilted by theta toward the axis: (-sin, -cos) in (radial, z).
-    dr_, dz = -np.sin(theta), -np.cos(theta)
-    down = dz < 0
-    t = np.where(down, -z_exit / np.where(down, dz, -1), 0)
-    rad = r_exit + t * dr_
-    xl, yl = rad * np.cos(pp), rad * np.sin(pp)
-    lands = down & (np.abs(xl) <= half) & (np.abs(yl) <= half)
-    del x0, y0
-    return lands, chord
-
-
 def _chain_flux(scene, seeds=K, photons=1 << 18):
     est = estimate_receivers(scene, photons=photons, seeds=seeds, resolution=(64, 64),
                              target_noise=1e-9)
     return est
-
-
-def _inradius_deficit(scene):
-    mesh = build_geometry(scene).objects[0].mesh
-    p = mesh.positions.astype(float) - np.array([0.0, 0.0, 2.0])
-    a, b, c = (p[mesh.faces[:, i]] for i in range(3))
-    n = np.cross(b - a, c - a)
-    dist = np.abs(np.einsum("ij,ij->i", n / np.linalg.norm(n, axis=1, keepdims=True), a))
-    return 1 - (dist.min() / 1.0) ** 2
 
 
 def test_glass_sphere_flux_is_e0_pi_r2_minus_what_leaves():
@@ -127,9 +96,9 @@ def test_glass_sphere_flux_is_e0_pi_r2_minus_what_leaves():
     area = m.texel_area()
     flux = m.irradiance[..., 1].sum() * area
     se = np.sqrt(m.variance[..., 1].sum()) * area
-    lands, _ = _ideal_sphere_paths(1.0, 2.0, 1.5, 1.5)
+    lands, _ = ideal_sphere_paths(1.0, 2.0, 1.5, 1.5)
     expected = e0 * np.pi * lands.mean()
-    deficit = _inradius_deficit(scene)
+    deficit = inradius_deficit(scene)
     print(f"sphere flux {flux:.4f} W vs expected {expected:.4f} W "
           f"(pi R^2 E0 = {e0 * np.pi:.4f}; leaves {1 - lands.mean():.4f}); "
           f"rel. error {flux / expected - 1:+.5f}, 4 se {4 * se / expected:.5f}, "
@@ -161,7 +130,7 @@ def test_absorption_scales_each_channel_by_exp_minus_sigma_d():
     ratios = np.array(ratios)
     measured = ratios.mean(axis=0)
     se = ratios.std(axis=0, ddof=1) / np.sqrt(K)
-    lands, chord = _ideal_sphere_paths(1.0, 2.0, 1.5, 1.5)
+    lands, chord = ideal_sphere_paths(1.0, 2.0, 1.5, 1.5)
     expected = np.array([np.exp(-s * chord[lands]).mean() for s in sigma])
     print(f"absorption ratio {measured} vs expected {expected}, 4 se {4 * se}")
     assert np.all(np.abs(measured - expected) < 4 * se + 0.003 * expected)
