@@ -21,7 +21,7 @@ def figure_10(ctx: FigureContext):
     strong = ctx.realtime(ctx.scene("bunny", preset="strong"))
     white = shared_white(ref.camera)
     rwhite = shared_white(ref.receivers[0].irradiance)
-    fig, axes = plt.subplots(3, 3, figsize=(9.6, 9.6))
+    fig, axes = plt.subplots(3, 3, figsize=(9.6, 9.6), layout="constrained")
     show(axes[0, 0], ref.camera, white=white, receiver=False, title="(a) reference camera")
     show(axes[0, 1], method.camera, white=white, receiver=False,
          title="(b) caustics mapping (paper)")
@@ -79,7 +79,7 @@ def figure_13a(ctx: FigureContext):
         ratio = np.where(a > 0, b / np.maximum(a, 1e-30), np.nan)
         rows.append({"renderer": renderer, "transmitted_r": float(ratio[0]),
                      "transmitted_g": float(ratio[1]), "transmitted_b": float(ratio[2])})
-    fig, grid = plt.subplots(2, 3, figsize=(9.6, 6.4))
+    fig, grid = plt.subplots(2, 3, figsize=(9.6, 6.4), layout="constrained")
     ref_img = results[("reference", "colored_bunny")].receivers[0].irradiance
     white = shared_white(ref_img)
     show(grid[0, 0], results[("caustics mapping", "colored_bunny")].receivers[0].irradiance,

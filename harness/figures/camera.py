@@ -11,6 +11,8 @@ the figure's data.
 
 from __future__ import annotations
 
+import textwrap
+
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -25,6 +27,12 @@ from scenes.geometry import build_geometry
 
 __all__ = ["OBJECT_COLUMNS", "camera_row", "figure_01", "figure_09", "object_difference_row",
            "object_scores"]
+
+#: Characters per line of a difference panel's title at 8 pt. The narrowest panel
+#: (Fig. 6: four columns in 12 inches, about 2.7 inches each once laid out) holds
+#: about 40 characters of DejaVu Sans at 8 pt (4.6 pt a character on average); 36
+#: leaves a margin for wide letters.
+TITLE_WIDTH = 36
 
 #: Columns of the object-region scores a camera figure tabulates.
 OBJECT_COLUMNS = ("scene", "method", "object_relmse", "object_ssim", "object_flip",
@@ -41,10 +49,25 @@ def object_scores(method: np.ndarray, reference: np.ndarray, mask: np.ndarray) -
     return out
 
 
-def object_difference_row(axes, *, scene, reference, methods) -> list[dict]:
+def _difference_title(label: str, scores: dict) -> str:
+    """``label − reference`` (on one line when it fits :data:`TITLE_WIDTH`, else the
+    label wrapped and ``− reference`` below it) over the object's relMSE and FLIP."""
+    head = f"{label} − reference"
+    if len(head) > TITLE_WIDTH:
+        head = textwrap.fill(label, TITLE_WIDTH) + "\n− reference"
+    return (f"{head}\nobject relMSE {scores['object_relmse']:.3g}, "
+            f"FLIP {scores['object_flip']:.3f}")
+
+
+def object_difference_row(axes, *, scene, reference, methods, bar_panel=None) -> list[dict]:
     """Draw, on ``axes`` (one per method), the signed luminance difference method −
     reference over the object (W m^-2 sr^-1, one symmetric scale shared by the row);
-    return one row of :data:`OBJECT_COLUMNS` per method."""
+    return one row of :data:`OBJECT_COLUMNS` per method.
+
+    The colour bar goes at the left edge of ``bar_panel`` (an otherwise empty panel of
+    the figure's grid) when given, else beside the row; a bar beside the row widens
+    the margin of its grid column in every row of a constrained layout.
+    """
     mask = object_region(scene.camera, build_geometry(scene))
     ref_lum = luminance(reference.camera)
     diffs = [luminance(result.camera) - ref_lum for _, result in methods]
@@ -57,14 +80,20 @@ def object_difference_row(axes, *, scene, reference, methods) -> list[dict]:
         rgb[mask] = false_colour(diff, vmin=-limit, vmax=limit)[mask] / 255.0
         ax.imshow(rgb, interpolation="nearest")
         scores = object_scores(result.camera, reference.camera, mask)
-        ax.set_title(f"{label} − reference over the object\nrelMSE "
-                     f"{scores['object_relmse']:.3g}, FLIP {scores['object_flip']:.3f}",
-                     fontsize=8)
+        # The panel says what is subtracted and the scores; "over the object" goes on
+        # the colour bar, once per row, which keeps each title within its panel.
+        ax.set_title(_difference_title(label, scores), fontsize=8)
         ax.set_axis_off()
         rows.append({"scene": scene.name, "method": label, **scores})
     mappable = plt.cm.ScalarMappable(cmap="RdBu_r", norm=plt.Normalize(-limit, limit))
-    axes[0].figure.colorbar(mappable, ax=list(axes), shrink=0.8,
-                            label="luminance difference, W m⁻² sr⁻¹")
+    figure = axes[0].figure
+    if bar_panel is not None:
+        bar_panel.set_axis_off()
+        bar = figure.colorbar(mappable, cax=bar_panel.inset_axes((0.0, 0.1, 0.06, 0.8)))
+    else:
+        bar = figure.colorbar(mappable, ax=list(axes), shrink=0.8)
+    bar.set_label("luminance difference over the object, W m⁻² sr⁻¹", fontsize=7)
+    bar.ax.tick_params(labelsize=7)
     return rows
 
 
@@ -97,14 +126,14 @@ def figure_01(ctx: FigureContext):
     (both presets) and the reference, with their differences over the bunny."""
 
     scene, ref, paper, strong = _camera_pair(ctx, "colored_bunny")
-    fig, axes = plt.subplots(2, 3, figsize=(9.6, 6.4))
+    fig, axes = plt.subplots(2, 3, figsize=(9.6, 6.4), layout="constrained")
     white = shared_white(ref.camera)
     methods = [("paper preset", paper), ("strong preset", strong)]
     for ax, (label, result) in zip(axes[0], [*methods, ("reference", ref)], strict=True):
         ms = "" if result is ref else f", {frame_seconds(result.timings) * 1e3:.0f} ms"
         show(ax, result.camera, white=white, receiver=False, title=f"{label}{ms}")
-    rows = object_difference_row(axes[1, :2], scene=scene, reference=ref, methods=methods)
-    axes[1, 2].set_axis_off()
+    rows = object_difference_row(axes[1, :2], scene=scene, reference=ref, methods=methods,
+                                 bar_panel=axes[1, 2])
     caption = ("Fig. 1 analogue: the absorbing bunny seen through double refraction "
                "(the method's camera pass after Wyman 2005; the reference's camera "
                "tracer). " + _caption_scores(rows) + ".")
@@ -116,7 +145,7 @@ def figure_09(ctx: FigureContext):
     """Fig. 9: a sphere and the bunny with double refraction: caustics mapping (paper
     preset) against the reference, and the difference over each object."""
 
-    fig, axes = plt.subplots(2, 3, figsize=(9.6, 6.4))
+    fig, axes = plt.subplots(2, 3, figsize=(9.6, 6.4), layout="constrained")
     rows = []
     for row, name in zip(axes, ("glass_sphere", "bunny"), strict=True):
         scene = ctx.scene(name)

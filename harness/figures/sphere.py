@@ -39,7 +39,7 @@ def figure_06(ctx: FigureContext):
     runs = _sphere_runs(ctx)
     ref = runs["reference"]
     white = shared_white(ref.camera)
-    fig, grid = plt.subplots(2, 4, figsize=(12, 6.6))
+    fig, grid = plt.subplots(2, 4, figsize=(12, 6.6), layout="constrained")
     axes = grid[0]
     rows, parts = [], []
     strong = resolve_settings(ctx.scene("glass_sphere", preset="strong").settings)
@@ -61,8 +61,8 @@ def figure_06(ctx: FigureContext):
                f"{ref.metadata['spp']} spp x {ref.metadata['seeds']}")
     scene = ctx.scene("glass_sphere")
     objects = object_difference_row(grid[1, :3], scene=scene, reference=ref,
-                                    methods=[(e[0], runs[e[1]]) for e in entries])
-    grid[1, 3].set_axis_off()
+                                    methods=[(e[0], runs[e[1]]) for e in entries],
+                                    bar_panel=grid[1, 3])
     rows = [(*row, o["object_relmse"], o["object_ssim"], o["object_flip"])
             for row, o in zip(rows, objects, strict=True)]
     table = Table(("method", "estimator", "preset", "iterations", "receiver_relmse",
@@ -90,7 +90,7 @@ def figure_07(ctx: FigureContext):
     diffs = {e: runs[e].receivers[0].irradiance - ref for _, e in METHODS}
     limit = float(max(np.percentile(np.abs(d.mean(axis=-1)), 99.5) for d in diffs.values()))
     limit = limit or 1.0
-    fig, axes = plt.subplots(1, 2, figsize=(6.4, 3.4))
+    fig, axes = plt.subplots(1, 2, figsize=(6.4, 3.4), layout="constrained")
     rows = []
     for ax, (label, estimator) in zip(axes, METHODS, strict=True):
         d = diffs[estimator].mean(axis=-1)
@@ -101,7 +101,9 @@ def figure_07(ctx: FigureContext):
                      "p99_abs_w_m2": float(np.percentile(np.abs(d), 99)),
                      "min_w_m2": float(d.min()), "max_w_m2": float(d.max())})
     mappable = plt.cm.ScalarMappable(cmap="RdBu_r", norm=plt.Normalize(-limit, limit))
-    fig.colorbar(mappable, ax=axes, shrink=0.8, label="method − reference, W/m²")
+    bar = fig.colorbar(mappable, ax=axes, shrink=0.8)
+    bar.set_label("method − reference, W/m²", fontsize=8)
+    bar.ax.tick_params(labelsize=7)
     table = Table.from_records(("method", "mean_abs_w_m2", "p99_abs_w_m2", "min_w_m2",
                                 "max_w_m2"), rows)
     caption = ("Fig. 7 analogue: signed difference of receiver irradiance against the "
@@ -151,7 +153,7 @@ def figure_13b(ctx: FigureContext):
     scene = ctx.scene("dispersion_sphere")
     ref, method = ctx.reference(scene), ctx.realtime(scene)
     extent = ref.receivers[0].extent
-    fig, grid = plt.subplots(2, 3, figsize=(9.6, 6.4))
+    fig, grid = plt.subplots(2, 3, figsize=(9.6, 6.4), layout="constrained")
     axes = grid[0, :2]
     grid[0, 2].set_axis_off()
     objects = camera_row(grid[1], scene=scene, reference=ref, method=method)

@@ -1,5 +1,7 @@
-"""`caustics figures --quick`: every figure is written with its data and caption, and
-the data say what the paper's figures show (the data are checked, not the pixels)."""
+"""`caustics figures --quick`: every figure is written with its data and caption, no
+two of its texts overlap, and the data say what the paper's figures show (the data
+are checked, not the pixels); and the overlap check itself, on figures made to
+overlap and not to."""
 
 from __future__ import annotations
 
@@ -7,17 +9,43 @@ import csv
 import json
 import math
 
+import matplotlib.pyplot as plt
 import pytest
 
 from harness.cli import main
-from harness.figures import FIGURES
+from harness.figures import FIGURES, FigureContext, common
+from harness.figures.common import FigureTextOverlapError, text_overlaps
+
+#: What ``FigureContext.save`` found when it checked each figure's texts, by figure
+#: name (None: saved without the check); filled by the ``figures`` fixture.
+CHECKED: dict[str, list | None] = {}
 
 
 @pytest.fixture(scope="module")
 def figures(tmp_path_factory):
+    """Every figure at quick settings, through the command; records what the overlap
+    check that ``save`` runs found for each (a failing check also fails the command,
+    whose assertion then shows the pairs)."""
     out = tmp_path_factory.mktemp("figures")
-    assert main(["figures", "-o", str(out), "--quick", "-q",
-                 "--cache-dir", str(out / "cache")]) == 0
+    found: dict[int, list] = {}
+    real_overlaps, real_save = common.text_overlaps, FigureContext.save
+
+    def recording_overlaps(figure, **kwargs):
+        found[id(figure)] = real_overlaps(figure, **kwargs)
+        return found[id(figure)]
+
+    def recording_save(self, name, figure, **kwargs):
+        try:
+            return real_save(self, name, figure, **kwargs)
+        finally:
+            CHECKED[name] = found.pop(id(figure), None)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(common, "text_overlaps", recording_overlaps)
+        patch.setattr(FigureContext, "save", recording_save)
+        code = main(["figures", "-o", str(out), "--quick", "-q",
+                     "--cache-dir", str(out / "cache")])
+    assert code == 0, CHECKED
     return out
 
 
@@ -33,6 +61,79 @@ def test_every_figure_has_png_pdf_data_and_caption(figures):
         assert (figures / f"{name}.csv").is_file() or (figures / f"{name}.json").is_file()
         caption = (figures / f"{name}.txt").read_text()
         assert caption.startswith("Fig.") and any(ch.isdigit() for ch in caption)
+
+
+def test_no_figure_has_overlapping_text(figures):
+    """Each figure the command can produce was checked when saved, and none has two
+    texts over each other (the bottom row of Figs. 6 and 10 once had its panel titles
+    run into each other)."""
+    assert set(CHECKED) == set(FIGURES)
+    assert {name: found for name, found in CHECKED.items() if found != []} == {}
+
+
+def _two_titles(*, gap: float):
+    """Two 2.4-inch panels side by side, ``gap`` inches apart, each under a 10-pt
+    title about 2.8 inches wide (measured): 0.4 inch wider than its panel."""
+    figure = plt.figure(figsize=(8.0, 3.0))
+    for i, name in enumerate(("left", "right")):
+        ax = figure.add_axes(((0.4 + i * (2.4 + gap)) / 8.0, 0.1, 2.4 / 8.0, 0.7))
+        ax.set_title(f"{name}: a title far wider than its own panel", fontsize=10)
+        ax.set_axis_off()
+    return figure
+
+
+def test_overlap_found_between_titles_of_neighbours():
+    """Over touching panels the two titles share 0.4 inch (40 px at the default 100
+    dpi), far over the 1-px tolerance; the pair names both titles, in drawing order."""
+    figure = _two_titles(gap=0.0)
+    try:
+        overlaps = text_overlaps(figure)
+    finally:
+        plt.close(figure)
+    assert len(overlaps) == 1
+    pair = overlaps[0]
+    assert pair.first == "title of axes 0 'left: a title far wider than its own panel'"
+    assert pair.second == "title of axes 1 'right: a title far wider than its own panel'"
+    assert 30 < pair.width_px < 50 and pair.height_px > 5
+
+
+def test_no_overlap_when_apart_and_hidden_ticks_ignored():
+    """The same titles over panels 0.8 inch apart (twice the 0.4 inch they would
+    share) do not overlap. The tick labels that an axes switched off still holds
+    (visible, but neither drawn nor placed: counted, two of them sit on each other)
+    are not counted."""
+    figure = _two_titles(gap=0.8)
+    try:
+        assert text_overlaps(figure) == []
+    finally:
+        plt.close(figure)
+
+
+def test_tick_labels_of_one_axis_overlap_each_other():
+    """Tick labels are checked against each other: twenty 10-pt labels of nine
+    characters on a 2-inch axis (about 0.1 inch per label, each label about 0.6
+    inch wide) collide."""
+    figure, ax = plt.subplots(figsize=(2.0, 2.0))
+    ax.set_xticks(range(20), [f"label {i:03d}" for i in range(20)])
+    try:
+        overlaps = text_overlaps(figure)
+    finally:
+        plt.close(figure)
+    assert overlaps and all("x tick label" in o.first and "x tick label" in o.second
+                            for o in overlaps)
+
+
+def test_save_refuses_a_figure_with_overlapping_text(tmp_path):
+    """``FigureContext.save`` raises the typed error naming the figure and both
+    titles, and writes nothing."""
+    context = FigureContext(out_dir=tmp_path)
+    with pytest.raises(FigureTextOverlapError) as raised:
+        context.save("figX", _two_titles(gap=0.0), caption="Fig. X")
+    message = str(raised.value)
+    assert message.startswith("figure figX: 1 pair(s) of texts overlap")
+    assert "'left: a title" in message and "'right: a title" in message
+    assert raised.value.name == "figX" and len(raised.value.overlaps) == 1
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_fig06_both_methods_scored(figures):
