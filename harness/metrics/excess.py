@@ -202,9 +202,10 @@ def relmse_variance_terms(method, reference, variance, *, seeds: int,
     -------
     terms : ndarray (H, W, C)
         Per texel and channel unbiased estimates of w_T (M − T)².
-    texel_variance : ndarray (H, W)
-        Estimated variance of Σ_c terms at each texel (may be slightly negative
-        where the bias corrections exceed a tiny plug-in value; sums are what count).
+    texel_variance : tuple of ndarray (H, W)
+        Estimated variance of Σ_c terms at each texel, in two parts: the linear
+        (α² v, after its plug-in correction; may be negative at a texel, sums are what
+        count) and the quadratic (β² v² terms, positive).
     baseline : ndarray (H, W, C)
         Per texel and channel expected raw relMSE term of a perfect method.
     dof_per_texel : int
@@ -279,9 +280,9 @@ def relmse_variance_terms(method, reference, variance, *, seeds: int,
         ww = w[..., :, None] * w[..., None, :]
         quadratic = 0.5 * ww * (vv * k / ((k - 1.0) * f) + vv2 * k2 / ((k2 - 1.0) * f2))
         dof = seeds + int(k2) - 2
-    texel_variance = np.einsum("...cd,cd->...", linear, rho) + np.einsum(
-        "...cd,cd->...", quadratic, rho2)
-    return terms, texel_variance, baseline, dof
+    texel_linear = np.einsum("...cd,cd->...", linear, rho)
+    texel_quadratic = np.einsum("...cd,cd->...", quadratic, rho2)
+    return terms, (texel_linear, texel_quadratic), baseline, dof
 
 
 def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
@@ -317,15 +318,20 @@ def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
         relMSE's regulariser (squared image units).
     """
     value = relative_mse(method, reference, mask=mask, epsilon=epsilon)
-    terms, texel_var, baseline, dof = relmse_variance_terms(
+    terms, (linear, quadratic), baseline, dof = relmse_variance_terms(
         method, reference, variance, seeds=seeds, independent=independent,
         independent_variance=independent_variance, independent_seeds=independent_seeds,
         channel_correlation=channel_correlation, epsilon=epsilon)
     sel = np.ones(terms.shape[:2], bool) if mask is None else np.asarray(mask, bool)
     count = terms[sel].size  # texels x channels, as relMSE averages
     excess = float(terms[sel].sum()) / count
-    texel_var = texel_var[sel]
-    total = float(texel_var.sum())
+    # The linear part's plug-in correction assumes the stated channel correlation; if
+    # the channels are in fact less correlated it overshoots and the part's sum can go
+    # negative. It is floored at 0 as a sum (not per texel, which would bias a correct
+    # specification upwards), so a wrong ρ = 1 leaves the quadratic part's (then
+    # overstated) variance rather than none.
+    texel_var = linear[sel] + quadratic[sel]
+    total = max(float(linear[sel].sum()), 0.0) + float(quadratic[sel].sum())
     stderr = float(np.sqrt(max(total, 0.0))) / count
     spread = float(np.sum(texel_var**2))
     df = total**2 / (spread / dof) if spread > 0 and total > 0 else float("inf")
