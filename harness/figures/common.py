@@ -79,8 +79,9 @@ class FigureTextOverlapError(HarnessError):
     def __init__(self, name: str, overlaps: list[TextOverlap]) -> None:
         self.name = name
         self.overlaps = tuple(overlaps)
-        lines = [f"figure {name}: {len(overlaps)} pair(s) of texts overlap; "
-                 f"first: {overlaps[0]}"]
+        count = ("two texts overlap:" if len(overlaps) == 1
+                 else f"{len(overlaps)} pairs of texts overlap, the first:")
+        lines = [f"figure {name}: {count} {overlaps[0]}"]
         lines += [f"{name}: {o}" for o in overlaps[1:]]
         super().__init__("\n".join(lines))
 

@@ -111,8 +111,8 @@ def test_no_overlap_when_apart_and_hidden_ticks_ignored():
 
 def test_tick_labels_of_one_axis_overlap_each_other():
     """Tick labels are checked against each other: twenty 10-pt labels of nine
-    characters on a 2-inch axis (about 0.1 inch per label, each label about 0.6
-    inch wide) collide."""
+    characters (each over half an inch wide) on the 1.5-inch x axis of a 2-inch
+    figure (under 0.1 inch apart) collide, and only with each other."""
     figure, ax = plt.subplots(figsize=(2.0, 2.0))
     ax.set_xticks(range(20), [f"label {i:03d}" for i in range(20)])
     try:
@@ -130,10 +130,23 @@ def test_save_refuses_a_figure_with_overlapping_text(tmp_path):
     with pytest.raises(FigureTextOverlapError) as raised:
         context.save("figX", _two_titles(gap=0.0), caption="Fig. X")
     message = str(raised.value)
-    assert message.startswith("figure figX: 1 pair(s) of texts overlap")
+    assert message.startswith("figure figX: two texts overlap: title of axes 0")
     assert "'left: a title" in message and "'right: a title" in message
     assert raised.value.name == "figX" and len(raised.value.overlaps) == 1
     assert list(tmp_path.iterdir()) == []
+
+
+def test_command_fails_on_a_figure_with_overlapping_text(tmp_path, monkeypatch, capsys):
+    """``caustics figures`` exits 1 with one ``error:`` line naming the figure and the
+    first pair when a figure's texts overlap (the figure here is made to)."""
+    monkeypatch.setitem(FIGURES, "figX", lambda ctx: ctx.save(
+        "figX", _two_titles(gap=0.0), caption="Fig. X"))
+    code = main(["figures", "--only", "figX", "-o", str(tmp_path / "out"), "-q",
+                 "--cache-dir", str(tmp_path / "cache")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1
+    assert len(err) == 1 and err[0].startswith("error: figure figX: two texts overlap: title")
+    assert "'left: a title" in err[0] and "'right: a title" in err[0]
 
 
 def test_fig06_both_methods_scored(figures):
