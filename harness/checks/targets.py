@@ -5,7 +5,8 @@ test suite), never loosened. Targets hold at the scene's own settings against a
 reference at its own budget: ``caustics compare`` checks them only for a committed
 scene run without setting overrides.
 
-Measures (:data:`MEASURES`), each of the receiver map named by the target's ``view``:
+Measures (the keys of :data:`harness.checks.bounds.MEASURES`), each of the receiver
+map named by the target's ``view``:
 
 ``relmse``
     relMSE over the reference's caustic region (``reports.records.METRIC_FORMULAS``).
@@ -39,24 +40,11 @@ from harness.compare.regions import caustic_region
 from reports.display import luminance
 from reports.records import ThresholdCheck
 
-__all__ = ["MEASURES", "TARGET", "check_targets", "focus_measures", "target_measures"]
+__all__ = ["TARGET", "check_targets", "focus_measures", "target_measures"]
 
 TARGET = "method target"
 #: Radius (m) of the focus share.
 FOCUS_RADIUS = 0.05
-MEASURES = {
-    "relmse": "caustic-region relMSE",
-    "flux_ratio": "total flux ratio, channel furthest from 1",
-    "focus_peak_ratio": "largest 3x3 box mean of the luminance, method / reference",
-    "focus_share_difference": "|method − reference| share of luminance within 5 cm of the focus",
-    "tir_flux_fraction": "share of the traced flux lost to total internal reflection",
-    "off_receiver_flux_fraction": "share of the traced flux splatted off every receiver",
-    "object_vertices": "grid vertices that traced an object",
-    "camera_black_fraction_difference":
-        "|black fraction of the camera over the sphere − the exact lens image's|",
-    "camera_object_radiance_ratio":
-        "mean luminance over the sphere, camera / exact lens image",
-}
 
 
 def focus_measures(reference: np.ndarray, method: np.ndarray, extent, *,
