@@ -9,7 +9,7 @@ matplotlib or playwright.
 Exit codes (:data:`EXIT_CODES`): 0 done; 1 bad input or a failure the harness
 detected (a scene error, an unwritable ``-o``, a refused file, a scene whose
 comparison failed); 2 usage (argparse, an unknown study or figure); 3 a bound or
-cross-check missed with ``--fail-on-thresholds`` / ``--fail-on-disagreement``;
+cross-check missed with ``--fail-on-checks`` / ``--fail-on-disagreement``;
 70 internal error (a bug: any other exception; ``--debug`` or ``CAUSTICS_DEBUG=1``
 prints its traceback); 130 interrupted. Every error is one ``error: ...`` line on
 stderr, never a traceback unless asked for.
@@ -137,8 +137,9 @@ def _compare_command(subparsers) -> None:
     p.add_argument("scenes", nargs="*", metavar="SCENE", help=_SCENES_HELP)
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     p.add_argument("--studies", metavar="LIST",
-                   help="comma-separated: metrics,convergence,cost,temporal,decomposition "
-                   "(default: metrics,convergence,cost; temporal renders the scene's "
+                   help="comma-separated: metrics,convergence,cost,temporal,decomposition, "
+                   "or a study another package registers (default: metrics,convergence,cost; "
+                   "temporal renders the scene's "
                    "[animation] frame by frame on both sides and writes temporal.csv, the "
                    "flicker metrics and an animation; decomposition traces exact light paths "
                    "and swaps in the method's approximations one at a time, writing "
@@ -161,14 +162,17 @@ def _compare_command(subparsers) -> None:
     p.add_argument("--photons", type=int, help="reference photon budget per seed")
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="override any setting (repeatable)")
-    p.add_argument("--thresholds", metavar="FILE",
+    p.add_argument("--locks", "--thresholds", dest="locks", metavar="FILE",
                    help="regression locks (default: the bundled ones); checked at the "
                    "golden settings against the golden references, for bundled scenes only; "
-                   "physical requirements and method targets are checked as well")
+                   "physical requirements and method targets are checked as well "
+                   "(--thresholds: the older name)")
     p.add_argument("--golden", metavar="DIR",
                    help="golden references the bounds hold against (default: the bundled ones)")
-    p.add_argument("--fail-on-thresholds", action="store_true",
-                   help="exit 3 when an accuracy check fails (a known gap does not)")
+    p.add_argument("--fail-on-checks", "--fail-on-thresholds", dest="fail_on_checks",
+                   action="store_true",
+                   help="exit 3 when an accuracy check of any kind fails (a known gap does "
+                   "not; --fail-on-thresholds: the older name)")
     p.add_argument("--self-contained", action="store_true",
                    help="embed images, plots, scripts in one HTML file per page")
     p.add_argument("--crosscheck", choices=("luxcore",),

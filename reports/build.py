@@ -2,7 +2,7 @@
 
 Layout written under ``out_dir``::
 
-    index.html              all scenes: key metrics, thresholds, thumbnails
+    index.html              all scenes: key metrics, accuracy checks, thumbnails
     _static/report.css      (not with self_contained)
     _static/report.js       (not with self_contained)
     <folder>/index.html     one scene; <folder> = scene_folder(name)
@@ -207,15 +207,15 @@ def _file_links(comparison: SceneComparison, folder: Path) -> list[dict[str, Any
     return links
 
 
-def _thresholds_summary(comparison: SceneComparison) -> dict[str, Any]:
+def _checks_summary(comparison: SceneComparison) -> dict[str, Any]:
     """Counts over all checks (``failed`` excludes known gaps) and per kind:
     ``kinds`` lists (kind, meaning, checks of that kind, counts) in
     :data:`CHECK_KINDS` order."""
-    checks = comparison.thresholds
+    checks = comparison.checks
     failed = sum(1 for t in checks if t.outcome == "FAIL")
     kinds = []
     for kind in CHECK_KINDS:
-        mine = [t for t in checks if t.category == kind]
+        mine = [t for t in checks if t.kind == kind]
         counts = {o: sum(1 for t in mine if t.outcome == o)
                   for o in ("pass", "FAIL", "known gap", "gap closed")}
         kinds.append({"kind": kind, "meaning": CHECK_KIND_MEANING[kind], "checks": mine,
@@ -223,6 +223,26 @@ def _thresholds_summary(comparison: SceneComparison) -> dict[str, Any]:
     return {"passed": sum(1 for t in checks if t.passed), "failed": failed,
             "gaps": sum(1 for t in checks if t.outcome == "known gap"),
             "total": len(checks), "kinds": kinds}
+
+
+#: Studies whose sections have a panel of their own on the page.
+OWN_PANELS = ("convergence", "cost", "temporal", "decomposition")
+
+
+def _study_sections(comparison: SceneComparison) -> list[dict[str, Any]]:
+    """Every other study's section, shown generically: its title, its summary (a
+    ``summary`` in its JSON form), its other values and its tables."""
+    out = []
+    for section in comparison.sections:
+        if section.name in OWN_PANELS:
+            continue
+        data = jsonable(section.as_dict())
+        summary = data.pop("summary", "") if isinstance(data, dict) else ""
+        data.pop("tables", None)
+        out.append({"name": section.name, "title": section.title, "summary": summary,
+                    "values": data.get("values", data),
+                    "tables": [(name, _table(t)) for name, t in section.tables().items()]})
+    return out
 
 
 def _flux_budget(comparison: SceneComparison | SceneFailure) -> dict[str, Any] | None:
@@ -280,8 +300,9 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
         "flux_budget": _flux_budget(comparison),
         "plots": _plot_panels(comparison, assets),
         "files": _file_links(comparison, folder),
-        "thresholds": _thresholds_summary(comparison),
-        "provenance": jsonable(comparison.provenance),
+        "checks": _checks_summary(comparison),
+        "provenance": jsonable(comparison.provenance.as_dict()),
+        "sections": _study_sections(comparison),
         "settings": jsonable(comparison.settings),
         "stability": jsonable(comparison.stability),
         "hdr_inline": hdr_inline,
@@ -335,7 +356,7 @@ def write_page(out_dir: Path, item: SceneComparison | SceneFailure, *, folder: s
         except KeyError:
             metrics.append(None)
     return {"c": item, "failure": False, "folder": folder, "href": href, "metrics": metrics,
-            "thresholds": _thresholds_summary(item),
+            "checks": _checks_summary(item),
             "thumbnails": thumbnails(item, folder, out_dir, self_contained)}
 
 

@@ -25,8 +25,8 @@ vertically for display so +v points up.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from dataclasses import asdict, dataclass, field, replace
+from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -37,17 +37,26 @@ if TYPE_CHECKING:  # the temporal record imports Table from here
 __all__ = [
     "CHECK_KINDS",
     "CHECK_KIND_MEANING",
+    "CHECK_RELATIONS",
     "CLAIM_VERDICTS",
     "METRIC_FORMULAS",
+    "Check",
     "ClaimVerdict",
+    "ConvergenceSection",
+    "CostSection",
     "EqualErrorSpeedup",
+    "FluxBudgets",
     "Headline",
+    "MethodProvenance",
     "MetricValue",
+    "Provenance",
+    "RecordSection",
     "SceneComparison",
     "SceneFailure",
+    "Section",
     "SpeedupWithheld",
+    "StudySection",
     "Table",
-    "ThresholdCheck",
 ]
 
 #: Human-readable formula of each metric, shown beside its value in every output.
@@ -155,7 +164,8 @@ class Headline:
         ``reference_noise`` (the reference missed its noise target),
         ``noise_floor`` (the method's error is within the reference's noise),
         ``speedup`` (the equal-error speedup, or why it is withheld), ``claim``
-        (a paper claim's verdict), ``budget`` (a flux budget that does not close).
+        (a paper claim's verdict), ``budget`` (a flux budget that does not close),
+        ``checks`` (accuracy checks that failed, each cited).
     level : str
         ``warning`` (read before any number below) or ``note``.
     text : str
@@ -228,29 +238,48 @@ CHECK_KIND_MEANING = {
                      "missed today is a known gap, never a loosened number",
     "regression lock": "calibrated from today's output: guards against change, not accuracy",
 }
+#: How a check's bound applies to its value.
+CHECK_RELATIONS = {"max": "value <= bound", "min": "value >= bound", "band": "|value - 1| <= bound"}
 
 
 @dataclass(frozen=True)
-class ThresholdCheck:
+class Check:
     """One accuracy check and whether it held.
 
-    ``category`` is one of :data:`CHECK_KINDS`; ``subject`` says whose output is
-    checked (``method`` or ``reference``); ``kind`` how the bound applies (``max``:
-    value <= bound, ``min``: value >= bound, ``band``: |value − 1| <= bound);
-    ``provenance`` where the number comes from (its derivation, reason or
-    calibration); ``gap`` is set when the check is a known miss (an expected failure
-    whose reason names the gap).
+    Attributes
+    ----------
+    metric, region, view : str
+        What was measured, and where.
+    bound : float
+        The number the value is held to.
+    relation : str
+        How the bound applies (:data:`CHECK_RELATIONS`): ``max`` (value <= bound),
+        ``min`` (value >= bound) or ``band`` (|value − 1| <= bound).
+    value : float
+        The measured value.
+    passed : bool
+        Whether the value kept the bound.
+    origin : str
+        Where the bound comes from: its derivation, the reason for a target, or the
+        calibration of a lock.
+    kind : str
+        One of :data:`CHECK_KINDS`.
+    subject : str
+        Whose output is checked: ``method`` or ``reference``.
+    gap : str
+        Set when the check is a known miss (an expected failure whose reason names
+        the gap).
     """
 
     metric: str
     region: str
     view: str
     bound: float
-    kind: str
+    relation: str
     value: float
     passed: bool
-    provenance: str = ""
-    category: str = "regression lock"
+    origin: str = ""
+    kind: str = "regression lock"
     subject: str = "method"
     gap: str = ""
 
@@ -265,13 +294,286 @@ class ThresholdCheck:
     @property
     def bound_text(self) -> str:
         """The bound as a condition on the value."""
-        sign = {"max": "≤ ", "min": "≥ ", "band": "|v − 1| ≤ "}.get(self.kind, "")
+        sign = {"max": "≤ ", "min": "≥ ", "band": "|v − 1| ≤ "}.get(self.relation, "")
         return f"{sign}{self.bound:.4g}"
+
+    @property
+    def label(self) -> str:
+        """``kind: metric (view, region)``, as headlines cite it."""
+        return f"{self.kind}: {self.metric} ({self.view}, {self.region})"
+
+
+@dataclass(frozen=True)
+class MethodProvenance:
+    """How the method's render was made and timed.
+
+    Attributes
+    ----------
+    name, renderer : str
+        The method's registered name and the renderer it reports.
+    timer : str
+        What ``frame_time_ms`` measured, with which clock.
+    frame_time_ms : float
+        Warm frame time (median of the repeats after a warm-up), ms.
+    timings_ms : dict of str to float
+        The last timed frame's per-pass times (ms), when the method reports passes.
+    maps_time_ms : float or None
+        Warm time of the passes that produce the receiver maps (ms): the scope of the
+        equal-error speedup (caustics mapping only).
+    preset, passes, gl_renderer, lost_splats, status_counts, status_flux_fraction
+        Caustics mapping only: the preset, the passes run, the GL renderer, splats
+        lost, per-status vertex counts and flux shares.
+    worker : str or None
+        The Dask worker that rendered it (sweeps).
+    metadata : dict
+        What a third-party method reported (its ``RenderResult.metadata``).
+    """
+
+    name: str
+    renderer: str
+    timer: str
+    frame_time_ms: float
+    timings_ms: dict[str, float] = field(default_factory=dict)
+    maps_time_ms: float | None = None
+    preset: str | None = None
+    passes: tuple[str, ...] | None = None
+    gl_renderer: str | None = None
+    lost_splats: Any = None
+    status_counts: dict[str, Any] | None = None
+    status_flux_fraction: dict[str, Any] | None = None
+    worker: str | None = None
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where every number of a comparison comes from.
+
+    Attributes
+    ----------
+    scene_file : str
+        The scene file compared.
+    method : MethodProvenance
+        The method's render and its timing.
+    reference, independent_reference : dict
+        The reference's settings, noise, versions, timings and cache outcome; the
+        independent reference's seeds, noise and cache outcome.
+    machine : dict
+        Platform, processor, CPU count, Python version.
+    notes : tuple of str
+        What was left out and why (e.g. a camera that a ``ptracer`` reference cannot
+        score).
+    checks_not_applied : dict of str to str
+        Per kind of accuracy check that did not apply, why.
+    crosscheck : dict or None
+        The independent renderer's settings, when a cross-check ran.
+    sweep : dict or None
+        The sweep row's settings, when the comparison is a sweep row.
+    """
+
+    scene_file: str
+    method: MethodProvenance
+    reference: dict[str, Any] = field(default_factory=dict)
+    independent_reference: dict[str, Any] = field(default_factory=dict)
+    machine: dict[str, Any] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+    checks_not_applied: dict[str, str] = field(default_factory=dict)
+    crosscheck: dict[str, Any] | None = None
+    sweep: dict[str, Any] | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON form (``metrics.json``'s ``provenance``)."""
+        return asdict(self)
+
+
+@runtime_checkable
+class Section(Protocol):
+    """What a study adds to a comparison (``harness.compare.studies``): a typed
+    record with a name, a title, a JSON form and its tables.
+
+    ``metrics.json`` holds ``as_dict()`` under ``studies[name]``; every table of
+    ``tables()`` is written as a CSV file of that name beside it; the page shows the
+    section under its title (its values and tables, unless the report has a
+    dedicated panel for it).
+    """
+
+    name: str
+    title: str
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON form (strict JSON: NaN becomes null)."""
+        ...
+
+    def tables(self) -> dict[str, Table]:
+        """CSV files to write: file name (``convergence.csv``) → table."""
+        ...
+
+
+@dataclass(frozen=True)
+class StudySection:
+    """A generic study section: a summary sentence, named values and tables.
+
+    Attributes
+    ----------
+    name : str
+        Key in ``metrics.json``'s ``studies`` and the page's anchor (letters, digits,
+        ``_``).
+    title : str
+        Heading on the page.
+    summary : str
+        One or two sentences with the study's finding.
+    values : dict
+        Named numbers (JSON-serialisable), shown as a list on the page.
+    files : dict of str to Table
+        CSV files to write beside ``metrics.json`` (file name → table).
+    """
+
+    name: str
+    title: str
+    summary: str = ""
+    values: dict[str, Any] = field(default_factory=dict)
+    files: dict[str, Table] = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON form: summary, values and each table's records."""
+        return {"summary": self.summary, "values": self.values,
+                "tables": {name: t.records() for name, t in self.files.items()}}
+
+    def tables(self) -> dict[str, Table]:
+        """The CSV files of :attr:`files`."""
+        return dict(self.files)
+
+
+@dataclass(frozen=True)
+class ConvergenceSection:
+    """The estimators' convergence table and the paper's claims judged on it.
+
+    Attributes
+    ----------
+    table : Table
+        Columns: estimator, safeguarded, iteration, mean_error_m, p95_error_m,
+        max_error_m, mean_error_texels, p95_error_texels, max_error_texels,
+        converged, diverged, oscillating, stalled, lost, lookups_per_vertex, relmse,
+        time_ms.
+    claims : dict of str to str
+        Each claim and its verdict as a sentence.
+    claim_verdicts : tuple of ClaimVerdict
+        The same verdicts with their numbers and uncertainties.
+    """
+
+    table: Table
+    claims: dict[str, str] = field(default_factory=dict)
+    claim_verdicts: tuple[ClaimVerdict, ...] = ()
+    name: str = "convergence"
+    title: str = "Convergence of the intersection estimators"
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON form: the claims (the table is ``convergence.csv``)."""
+        return {"claims": self.claims, "claim_verdicts": [asdict(v) for v in self.claim_verdicts]}
+
+    def tables(self) -> dict[str, Table]:
+        """``convergence.csv``."""
+        return {"convergence.csv": self.table}
+
+
+@dataclass(frozen=True)
+class CostSection:
+    """What accuracy costs in time: the sweep and the equal-error speedup.
+
+    Attributes
+    ----------
+    table : Table
+        Columns: series (``caustics_mapping`` or ``reference``), label, estimator,
+        iterations, grid, caustic_map, splat_sigma, time_warm_s, time_cold_s, relmse,
+        pareto.
+    speedup, speedup_cold : EqualErrorSpeedup or None
+        Warm against warm (the headline) and cold against cold.
+    point : (float, float) or None
+        The method's (time s, relMSE) the speedups were computed for.
+    timing : dict
+        The timing policy and each side's one-off costs: ``{"policy": str,
+        "method": {"build_s", "compile_s"}, "reference": {...}}``.
+    """
+
+    table: Table
+    speedup: EqualErrorSpeedup | None = None
+    speedup_cold: EqualErrorSpeedup | None = None
+    point: tuple[float, float] | None = None
+    timing: dict[str, Any] = field(default_factory=dict)
+    name: str = "cost"
+    title: str = "What accuracy costs in time"
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON form: the speedups, the point and the timing policy (the sweep is
+        ``cost_accuracy.csv``)."""
+        return {"warm": asdict(self.speedup) if self.speedup else None,
+                "cold": asdict(self.speedup_cold) if self.speedup_cold else None,
+                "point": list(self.point) if self.point else None, **self.timing}
+
+    def tables(self) -> dict[str, Table]:
+        """``cost_accuracy.csv``."""
+        return {"cost_accuracy.csv": self.table}
+
+
+@dataclass(frozen=True)
+class RecordSection:
+    """A study whose record has a panel of its own on the page (the temporal study's
+    :class:`~reports.temporal_records.TemporalComparison`, the decomposition's
+    :class:`~reports.decomposition_records.DecompositionRecord`).
+
+    Attributes
+    ----------
+    name, title : str
+        As :class:`Section`.
+    record : object
+        The study's record; it has ``as_dict()`` and a ``table`` (the CSV named
+        ``csv``).
+    csv : str
+        File name of the record's table.
+    """
+
+    name: str
+    title: str
+    record: Any
+    csv: str
+
+    def as_dict(self) -> dict[str, Any]:
+        """The record's JSON form."""
+        return self.record.as_dict()
+
+    def tables(self) -> dict[str, Table]:
+        """The record's table under :attr:`csv`."""
+        return {self.csv: self.record.table}
+
+
+@dataclass(frozen=True)
+class FluxBudgets:
+    """Where the light went, on both sides (``harness.compare.budget``).
+
+    Attributes
+    ----------
+    summary : Table or None
+        Columns: item, flux_w, fraction (of the traced flux); the report shows it
+        when the flux ratio is far from 1.
+    method, reference : Table or None
+        Each side's budget in watts per RGB channel
+        (``harness.compare.budget.SIDE_COLUMNS``): emitted toward the object, where
+        it went, and what is unaccounted; the reference's from a separate
+        caustic-only trace, with standard errors.
+    trace : dict or None
+        Provenance of the reference's budget trace (photons, launches, seed, stream,
+        seconds, emitted and unaccounted watts).
+    """
+
+    summary: Table | None = None
+    method: Table | None = None
+    reference: Table | None = None
+    trace: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True, eq=False)
 class SceneComparison:
-    """Everything the report shows for one scene.
+    """Everything the report shows for one scene and method, in typed sections.
 
     Attributes
     ----------
@@ -281,78 +583,38 @@ class SceneComparison:
         Effects the scene calls for.
     settings : dict
         Renderer settings used (JSON-serialisable).
+    method, method_description : str
+        The method compared (a caustics-mapping preset, ``paper`` or ``strong``, or a
+        registered third-party method) and its one-line description.
     metrics : tuple of MetricValue
     images : dict of str to ndarray
         See the module docstring for keys and layouts.
     exposure : dict
         ``white`` (tone-curve white point per view), ``flip_start``, ``flip_stop``
         (exposure stops), ``diff_range`` (symmetric colour-bar limit per view).
-    convergence : Table or None
-        Columns: estimator, safeguarded, iteration, mean_error_m, p95_error_m,
-        max_error_m, mean_error_texels, p95_error_texels, max_error_texels,
-        converged, diverged, oscillating, stalled, lost, lookups_per_vertex, relmse,
-        time_ms.
-    cost : Table or None
-        Columns: series (``caustics_mapping`` or ``reference``), label, estimator,
-        iterations, grid, caustic_map, splat_sigma, time_warm_s, time_cold_s, relmse,
-        pareto.
-    speedup : EqualErrorSpeedup or None
-        Warm against warm: the headline (``harness.studies.timing``).
-    speedup_cold : EqualErrorSpeedup or None
-        Cold against cold: one-off build and compile costs included on both sides.
-    timing : dict or None
-        The timing policy and each side's one-off costs: ``{"policy": str,
-        "method": {"build_s", "compile_s"}, "reference": {...}}``.
-    temporal : TemporalComparison or None
-        The temporal study (``--studies temporal``): the animation compared frame by
-        frame, its flicker metrics and per-pixel maps (``reports.temporal_records``).
-    decomposition : DecompositionRecord or None
-        Where the error comes from (``--studies decomposition``): exact light paths,
-        then the method's approximations one at a time (``reports.decomposition_records``).
-    claims : dict of str to str
-        The paper's claims checked against the convergence numbers, and the outcome.
-    provenance : dict
-        Passes run, event chains counted, photons/spp, seeds, versions, timings,
-        timer, machine, reference cache hit.
     files : dict of str to str
         Paths of written originals relative to the scene's output folder
         (``{"camera/method": "camera_method.exr", ...}``).
-    thresholds : tuple of ThresholdCheck
-        The accuracy checks of every kind (physical requirements, method targets,
-        regression locks) that applied to this scene and method.
+    provenance : Provenance
     stability : dict or None
         Outcome of the numerical-stability checks for this scene, if run.
+    budgets : FluxBudgets
+        Where the light went on both sides.
+    sections : tuple of Section
+        What each study added (``harness.compare.studies``), in the order they ran.
+    checks : tuple of Check
+        The accuracy checks of every kind (physical requirements, method targets,
+        regression locks) that applied to this scene and method.
     crosscheck : Table or None
         The reference against an independent renderer, when one was run. Columns:
         kind (total, encircled, region), label, share, reference_w, other_w, ratio,
         deviation_pct (100 (ratio - 1)), sigma_pct, z, tolerance_pct, agrees.
-    speedup_point : (float, float) or None
-        The caustics-mapping (time s, relMSE) that ``speedup`` was computed for;
-        the report marks it on the cost plot (when None it takes the Pareto point
-        nearest to ``speedup.reference_time / speedup.speedup``).
-    method, method_description : str
-        The method compared (a caustics-mapping preset, ``paper`` or ``strong``, or a
-        registered third-party method) and its one-line description.
-    flux_budget : Table or None
-        Where the light went (``harness.compare.budget``). Columns: item, flux_w,
-        fraction (of the traced flux); the report shows it when the flux ratio is
-        far from 1.
-    method_budget, reference_budget : Table or None
-        Each side's flux budget in watts per RGB channel
-        (``harness.compare.budget.SIDE_COLUMNS``): emitted toward the object, where
-        it went, and what is unaccounted; the reference's from a separate
-        caustic-only trace (``budget_trace``), with standard errors.
-    budget_trace : dict or None
-        Provenance of the reference's budget trace (photons, launches, seed, stream,
-        seconds, emitted and unaccounted watts).
     headlines : tuple of Headline
-        Banners at the top of the page (``harness.compare.headlines``).
-    claim_verdicts : tuple of ClaimVerdict
-        The paper's claims with the uncertainty of their numbers (``claims`` holds
-        the same verdicts as sentences).
+        Banners at the top of the page (``harness.compare.headlines``), made last so
+        that they can cite the checks.
     speedup_withheld : SpeedupWithheld or None
-        Set when the equal-error speedup is not meaningful (``speedup`` and
-        ``speedup_cold`` are then None): why, and the values computed.
+        Set when the equal-error speedup is not meaningful: why, and the values
+        computed (:attr:`speedup` and :attr:`speedup_cold` are then None).
     """
 
     name: str
@@ -360,31 +622,19 @@ class SceneComparison:
     source: str
     effects: tuple[str, ...]
     settings: dict[str, Any]
+    method: str
+    method_description: str
     metrics: tuple[MetricValue, ...]
     images: dict[str, np.ndarray]
     exposure: dict[str, Any]
-    convergence: Table | None = None
-    cost: Table | None = None
-    speedup: EqualErrorSpeedup | None = None
-    claims: dict[str, str] = field(default_factory=dict)
-    provenance: dict[str, Any] = field(default_factory=dict)
-    files: dict[str, str] = field(default_factory=dict)
-    thresholds: tuple[ThresholdCheck, ...] = ()
+    files: dict[str, str]
+    provenance: Provenance
     stability: dict[str, Any] | None = None
-    speedup_point: tuple[float, float] | None = None
+    budgets: FluxBudgets = field(default_factory=FluxBudgets)
+    sections: tuple[Section, ...] = ()
+    checks: tuple[Check, ...] = ()
     crosscheck: Table | None = None
-    method: str = "paper"
-    method_description: str = ""
-    flux_budget: Table | None = None
-    speedup_cold: EqualErrorSpeedup | None = None
-    timing: dict[str, Any] | None = None
-    temporal: TemporalComparison | None = None
-    decomposition: DecompositionRecord | None = None
-    method_budget: Table | None = None
-    reference_budget: Table | None = None
-    budget_trace: dict[str, Any] | None = None
     headlines: tuple[Headline, ...] = ()
-    claim_verdicts: tuple[ClaimVerdict, ...] = ()
     speedup_withheld: SpeedupWithheld | None = None
 
     @property
@@ -398,6 +648,94 @@ class SceneComparison:
             if (m.view, m.region, m.metric) == (view, region, metric):
                 return m
         raise KeyError((view, region, metric))
+
+    def section(self, name: str) -> Section | None:
+        """The section a study named ``name`` added, or None."""
+        return next((s for s in self.sections if s.name == name), None)
+
+    def with_section(self, section: Section) -> SceneComparison:
+        """A copy with ``section`` in place of the one of its name (or added last)."""
+        kept = [s for s in self.sections if s.name != section.name]
+        at = next((i for i, s in enumerate(self.sections) if s.name == section.name),
+                  len(kept))
+        return replace(self, sections=(*kept[:at], section, *kept[at:]))
+
+    # Typed views of the built-in studies' sections, for the report's own panels.
+
+    @property
+    def convergence(self) -> Table | None:
+        """The convergence table (:class:`ConvergenceSection`), if that study ran."""
+        section = self.section("convergence")
+        return section.table if section is not None else None
+
+    @property
+    def cost(self) -> Table | None:
+        """The cost-versus-accuracy sweep (:class:`CostSection`), if that study ran."""
+        section = self.section("cost")
+        return section.table if section is not None else None
+
+    @property
+    def speedup(self) -> EqualErrorSpeedup | None:
+        """Warm-against-warm equal-error speedup; None when withheld or not run."""
+        section = self.section("cost")
+        return None if section is None or self.speedup_withheld else section.speedup
+
+    @property
+    def speedup_cold(self) -> EqualErrorSpeedup | None:
+        """Cold-against-cold equal-error speedup; None when withheld or not run."""
+        section = self.section("cost")
+        return None if section is None or self.speedup_withheld else section.speedup_cold
+
+    @property
+    def speedup_point(self) -> tuple[float, float] | None:
+        """The method's (time s, relMSE) the speedups were computed for."""
+        section = self.section("cost")
+        return section.point if section is not None else None
+
+    @property
+    def timing(self) -> dict[str, Any] | None:
+        """The cost study's timing policy and one-off costs, if it ran."""
+        section = self.section("cost")
+        return section.timing if section is not None else None
+
+    @property
+    def claim_verdicts(self) -> tuple[ClaimVerdict, ...]:
+        """The paper's claims with their numbers (from the convergence study)."""
+        section = self.section("convergence")
+        return section.claim_verdicts if section is not None else ()
+
+    @property
+    def claims(self) -> dict[str, str]:
+        """Every claim any section judged, as sentences."""
+        out: dict[str, str] = {}
+        for s in self.sections:
+            claims = getattr(s, "claims", None)
+            if claims is None and isinstance(s, RecordSection):
+                claims = getattr(s.record, "claims", None)
+            out |= claims or {}
+        return out
+
+    @property
+    def temporal(self) -> TemporalComparison | None:
+        """The temporal study's record, if it ran."""
+        section = self.section("temporal")
+        return section.record if section is not None else None
+
+    @property
+    def decomposition(self) -> DecompositionRecord | None:
+        """The decomposition study's record, if it ran."""
+        section = self.section("decomposition")
+        return section.record if section is not None else None
+
+    @property
+    def flux_budget(self) -> Table | None:
+        """The summary flux budget (:attr:`FluxBudgets.summary`)."""
+        return self.budgets.summary
+
+    @property
+    def failed_checks(self) -> tuple[Check, ...]:
+        """The checks that failed (known gaps excluded)."""
+        return tuple(c for c in self.checks if c.outcome == "FAIL")
 
 
 @dataclass(frozen=True)

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from reports.records import METRIC_FORMULAS, MetricValue, ThresholdCheck
+from reports.records import METRIC_FORMULAS, Check, MetricValue
 from scenes.errors import HarnessError
 from scenes.schema import build, spec
 
@@ -202,7 +202,7 @@ def load_gaps(path: str | Path) -> tuple[Gap, ...]:
 
 
 def check_locks(scene: str, metrics: list[MetricValue] | tuple[MetricValue, ...],
-                bounds: tuple[Bound, ...]) -> tuple[ThresholdCheck, ...]:
+                bounds: tuple[Bound, ...]) -> tuple[Check, ...]:
     """Check every lock of ``scene`` against its metric; a missing metric fails."""
     values = {(m.view, m.region, m.metric): m.value for m in metrics}
     checks = []
@@ -210,8 +210,8 @@ def check_locks(scene: str, metrics: list[MetricValue] | tuple[MetricValue, ...]
         if b.scene != scene:
             continue
         value = values.get((b.view, b.region, b.metric), float("nan"))
-        checks.append(ThresholdCheck(metric=b.metric, region=b.region, view=b.view,
-                                     bound=b.bound, kind=b.kind, value=value,
-                                     passed=b.holds(value), provenance=b.provenance,
-                                     category=LOCK))
+        checks.append(Check(metric=b.metric, region=b.region, view=b.view,
+                                     bound=b.bound, relation=b.kind, value=value,
+                                     passed=b.holds(value), origin=b.provenance,
+                                     kind=LOCK))
     return tuple(checks)

@@ -35,7 +35,7 @@ from harness.checks.bounds import holds
 from harness.checks.physical import PHYSICAL
 from harness.checks.sphere_camera import SphereCamera, analytic_sphere_camera, black_fraction
 from reports.display import luminance
-from reports.records import ThresholdCheck
+from reports.records import Check
 from scenes import Scene
 
 __all__ = ["LENS_BOUND", "camera_measures", "camera_requirements", "exact_camera"]
@@ -58,18 +58,18 @@ def exact_camera(scene: Scene, reference_maps, *,
 
 
 def camera_requirements(exact: SphereCamera, reference_camera: np.ndarray
-                        ) -> list[ThresholdCheck]:
+                        ) -> list[Check]:
     """``reference lens image`` (module docstring)."""
     value = abs(black_fraction(reference_camera, exact.interior) - exact.black_fraction)
-    return [ThresholdCheck(
+    return [Check(
         metric="reference lens image", region="object", view="camera", bound=LENS_BOUND,
-        kind="max", value=float(value), passed=holds("max", LENS_BOUND, value),
-        provenance=(f"|black fraction over the sphere − the exact lens image's "
+        relation="max", value=float(value), passed=holds("max", LENS_BOUND, value),
+        origin=(f"|black fraction over the sphere − the exact lens image's "
                     f"({exact.black_fraction:.3f})|; the exact: the ideal sphere's two "
                     "refractions to the plane, shaded with the analytic direct light "
                     "and the reference's caustic map; 0.05: the icosphere's facets move "
                     "the sky's edge by about a pixel"),
-        category=PHYSICAL, subject="reference")]
+        kind=PHYSICAL, subject="reference")]
 
 
 def camera_measures(exact: SphereCamera, method_camera: np.ndarray) -> dict[str, float]:

@@ -62,7 +62,7 @@ from harness.checks.analytic import (
 )
 from harness.checks.bounds import holds
 from harness.checks.stability import incident_flux_bound
-from reports.records import ThresholdCheck
+from reports.records import Check
 from scenes.geometry import SceneGeometry
 from scenes.model import DielectricMaterial, Scene, SphereObject
 
@@ -86,10 +86,10 @@ CHECK_NAMES = ("finite", "energy", "flux agreement", "no TIR in a sphere",
 
 
 def _check(name: str, value: float, bound: float, kind: str, provenance: str, *,
-           subject: str = "method", view: str = "all", region: str = "full") -> ThresholdCheck:
-    return ThresholdCheck(metric=name, region=region, view=view, bound=float(bound), kind=kind,
+           subject: str = "method", view: str = "all", region: str = "full") -> Check:
+    return Check(metric=name, region=region, view=view, bound=float(bound), relation=kind,
                           value=float(value), passed=holds(kind, bound, value),
-                          provenance=provenance, category=PHYSICAL, subject=subject)
+                          origin=provenance, kind=PHYSICAL, subject=subject)
 
 
 def flux_standard_error(maps) -> np.ndarray | None:
@@ -118,7 +118,7 @@ def sphere_deficit(scene: Scene, geometry: SceneGeometry) -> float | None:
 
 def method_requirements(scene: Scene, geometry: SceneGeometry, *, method_maps, reference_maps,
                         stability: dict, flux_se: np.ndarray | None = None,
-                        flux_se_note: str = "") -> list[ThresholdCheck]:
+                        flux_se_note: str = "") -> list[Check]:
     """The physical requirements on one method render (module docstring).
 
     ``method_maps`` and ``reference_maps`` are ReceiverMaps (the reference's with
@@ -189,7 +189,7 @@ def _share(image, variance, inside):
 
 def reference_requirements(scene: Scene, geometry: SceneGeometry, reference_maps, *,
                            analytic: IdealSphereCaustic | None = None,
-                           rays: int = 1536) -> list[ThresholdCheck]:
+                           rays: int = 1536) -> list[Check]:
     """The physical requirements on a reference render (module docstring).
 
     ``reference_maps`` must carry variance. The ideal-sphere checks apply when
@@ -276,7 +276,7 @@ def reference_requirements(scene: Scene, geometry: SceneGeometry, reference_maps
     return checks
 
 
-def apply_gaps(checks, gaps, *, scene: str, method: str) -> list[ThresholdCheck]:
+def apply_gaps(checks, gaps, *, scene: str, method: str) -> list[Check]:
     """``checks`` with each known gap (of this scene and method) marked."""
     out = []
     for c in checks:

@@ -38,11 +38,11 @@ from harness.checks.physical import (
     reference_requirements,
 )
 from harness.checks.targets import check_targets, target_measures
-from renderers.methods import load_method
+from renderers.methods import Method
 from renderers.results import ReceiverMap
-from reports.records import CHECK_KINDS, SceneComparison, ThresholdCheck
+from reports.records import CHECK_KINDS, Check
 from scenes import Scene, load_scene, with_settings
-from scenes.geometry import build_geometry
+from scenes.geometry import SceneGeometry
 
 __all__ = ["CheckFiles", "Checked", "comparison_checks", "count_by_kind", "load_check_files"]
 
@@ -66,7 +66,7 @@ def load_check_files(locks: Path, targets: Path = TARGETS_FILE,
 class Checked:
     """The checks that applied, and why each kind that did not, did not."""
 
-    checks: tuple[ThresholdCheck, ...]
+    checks: tuple[Check, ...]
     not_applied: dict[str, str] = field(default_factory=dict)
 
 
@@ -75,7 +75,7 @@ def count_by_kind(checks) -> dict[str, dict[str, int]]:
     known gaps (a known gap is neither passed nor failed)."""
     out = {}
     for kind in CHECK_KINDS:
-        mine = [c for c in checks if c.category == kind]
+        mine = [c for c in checks if c.kind == kind]
         out[kind] = {"checked": len(mine),
                      "passed": sum(1 for c in mine if c.outcome in ("pass", "gap closed")),
                      "failed": sum(1 for c in mine if c.outcome == "FAIL"),
@@ -83,39 +83,59 @@ def count_by_kind(checks) -> dict[str, dict[str, int]]:
     return out
 
 
-def _maps(comparison: SceneComparison, geometry, layer: str) -> list[ReceiverMap]:
+def _maps(images: dict[str, np.ndarray], geometry, layer: str) -> list[ReceiverMap]:
     maps = []
     for i, receiver in enumerate(geometry.receivers):
         variance = None
         if layer == "reference":
-            variance = comparison.images.get(f"receiver{i}/reference_variance")
-        maps.append(ReceiverMap(np.asarray(comparison.images[f"receiver{i}/{layer}"]),
+            variance = images.get(f"receiver{i}/reference_variance")
+        maps.append(ReceiverMap(np.asarray(images[f"receiver{i}/{layer}"]),
                                 receiver.extent, variance))
     return maps
 
 
-def _unchanged(scene: Scene, method: str, scenes_dir: Path) -> bool:
+def _unchanged(scene: Scene, method: Method, scenes_dir: Path) -> bool:
     """The scene's settings are the committed file's, after the method configured both
     (no ``--set`` or other override)."""
     try:
-        committed = load_method(method).configure(
-            load_scene(Path(scenes_dir) / f"{scene.name}.toml"))
+        committed = method.configure(load_scene(Path(scenes_dir) / f"{scene.name}.toml"))
     except Exception:  # any failure means "not the committed scene"
         return False
     return committed.settings == scene.settings
 
 
-def comparison_checks(scene: Scene, method: str, comparison: SceneComparison,
-                      files: CheckFiles, *, scenes_dir: Path, golden_dir: Path,
-                      ctx=None) -> Checked:
-    """All checks of one comparison (module docstring). ``scene`` is the scene as the
-    method configured it (``method.configure``)."""
-    geometry = build_geometry(scene)
-    method_maps = _maps(comparison, geometry, "method")
-    reference_maps = _maps(comparison, geometry, "reference")
+def comparison_checks(scene: Scene, method: Method, *, geometry: SceneGeometry,
+                      images: dict[str, np.ndarray], stability: dict | None,
+                      status_counts: dict | None, files: CheckFiles, scenes_dir: Path,
+                      golden_dir: Path, ctx=None) -> Checked:
+    """All checks of one comparison (module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene as the method configured it (``method.configure``).
+    method : Method
+        The method compared.
+    geometry : SceneGeometry
+        The scene's meshes.
+    images : dict of str to ndarray
+        The comparison's images (``reports.records``): ``receiver<i>/method``,
+        ``receiver<i>/reference``, ``receiver<i>/reference_variance``, and the
+        camera's ``camera/method`` and ``camera/reference`` when it was compared.
+    stability : dict or None
+        The render's numerical-stability summary.
+    status_counts : dict or None
+        The caustics-mapping per-status vertex counts (method targets on them).
+    files : CheckFiles
+        Locks, targets and gaps.
+    scenes_dir, golden_dir : Path
+        The committed scenes and the golden references.
+    """
+    method_maps = _maps(images, geometry, "method")
+    reference_maps = _maps(images, geometry, "reference")
     not_applied = {}
     checks = []
-    stability = comparison.stability or {}
+    stability = stability or {}
     if "flux_over_bound" in stability:
         checks += method_requirements(scene, geometry, method_maps=method_maps,
                                       reference_maps=reference_maps, stability=stability)
@@ -124,37 +144,36 @@ def comparison_checks(scene: Scene, method: str, comparison: SceneComparison,
     if all(m.variance is not None for m in reference_maps):
         checks += reference_requirements(scene, geometry, reference_maps)
     # As for the maps: the reference's checks run on a real reference (with variance).
-    has_camera = ("camera/method" in comparison.images and "camera/reference" in
-                  comparison.images and all(m.variance is not None for m in reference_maps))
+    has_camera = ("camera/method" in images and "camera/reference" in images
+                  and all(m.variance is not None for m in reference_maps))
     exact = None
     if has_camera:
-        height, width = np.shape(comparison.images["camera/reference"])[:2]
+        height, width = np.shape(images["camera/reference"])[:2]
         exact = exact_camera(scene, reference_maps, resolution=(width, height))
     if exact is not None:
-        checks += camera_requirements(exact, comparison.images["camera/reference"])
-    checks = apply_gaps(checks, files.gaps, scene=scene.name, method=method)
+        checks += camera_requirements(exact, images["camera/reference"])
+    checks = apply_gaps(checks, files.gaps, scene=scene.name, method=method.name)
 
     why = not_committed(scene, scenes_dir)
     if why is None and not _unchanged(scene, method, scenes_dir):
         why = "settings differ from the committed scene's"
     if why is None:
-        status = (comparison.provenance.get("caustics_mapping") or {}).get("status_counts")
         measures = target_measures(reference_maps[0], method_maps[0], stability=stability,
-                                   status_counts=status)
+                                   status_counts=status_counts)
         if exact is not None:
-            measures.update(camera_measures(exact, comparison.images["camera/method"]))
-        checks += check_targets(files.targets, scene=scene.name, method=method,
+            measures.update(camera_measures(exact, images["camera/method"]))
+        checks += check_targets(files.targets, scene=scene.name, method=method.name,
                                 measures=measures)
     else:
         not_applied["method target"] = why
     why = golden_applies(scene, scenes_dir, golden_dir)
-    if why is None and method not in LOCKED_METHODS:
-        why = f"no locks for method {method}"
+    if why is None and method.name not in LOCKED_METHODS:
+        why = f"no locks for method {method.name}"
     if why is None:
         golden = load_golden(golden_dir, scene.name)
         at_golden = with_settings(scene, {"receiver_map": GOLDEN_SETTINGS["receiver_map"]})
         maps = realtime_maps(at_golden, ctx=ctx)
-        checks += lock_checks(scene, method, maps, golden, files.locks)
+        checks += lock_checks(scene, method.name, maps, golden, files.locks)
     else:
         not_applied["regression lock"] = why
     return Checked(tuple(checks), not_applied)

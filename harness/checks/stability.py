@@ -24,7 +24,8 @@ from renderers.results import RenderResult
 from scenes.geometry import SceneGeometry
 from scenes.model import DirectionalLight, Scene, WaterSurface
 
-__all__ = ["estimate_outcomes", "incident_flux_bound", "off_receiver_flux", "stability_summary"]
+__all__ = ["convergence_outcomes", "estimate_outcomes", "incident_flux_bound", "off_receiver_flux",
+           "stability_summary"]
 
 
 def incident_flux_bound(scene: Scene, geometry: SceneGeometry) -> np.ndarray:
@@ -98,15 +99,7 @@ def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResul
     if hits is not None:
         summary["off_receiver_flux_fraction"] = off_receiver_flux(geometry, hits)
     if convergence is not None:
-        rows = [dict(zip(convergence.columns, r, strict=True)) for r in convergence.rows]
-        last = max(r["iteration"] for r in rows)
-        for r in rows:
-            if r["safeguarded"] and r["iteration"] == last:
-                summary[f"{r['estimator']} (safeguarded), {last} iterations"] = {
-                    k: round(float(r[k]), 4) for k in ("converged", "stalled", "lost",
-                                                       "diverged", "oscillating")}
-            if r["estimator"] == "newton" and not r["safeguarded"] and r["iteration"] == last:
-                summary["plain newton oscillating"] = round(float(r["oscillating"]), 4)
+        summary |= convergence_outcomes(convergence)
     return summary
 
 
@@ -139,3 +132,21 @@ def estimate_outcomes(scene: Scene, geometry: SceneGeometry, hits: dict[str, np.
     count = int(judged.sum())
     shares = {name: float((outcome == name).sum()) / max(count, 1) for name in OUTCOMES}
     return {**shares, "count": count}
+
+
+def convergence_outcomes(convergence) -> dict:
+    """The stability summary's entries from a convergence table
+    (``harness.studies.convergence_study``): the safeguarded estimators' outcomes at
+    the most iterations measured (``diverged`` and ``oscillating`` must be 0), and
+    plain Newton's oscillating share there."""
+    rows = convergence.records()
+    last = max(r["iteration"] for r in rows)
+    out = {}
+    for r in rows:
+        if r["safeguarded"] and r["iteration"] == last:
+            out[f"{r['estimator']} (safeguarded), {last} iterations"] = {
+                k: round(float(r[k]), 4) for k in ("converged", "stalled", "lost",
+                                                   "diverged", "oscillating")}
+        if r["estimator"] == "newton" and not r["safeguarded"] and r["iteration"] == last:
+            out["plain newton oscillating"] = round(float(r["oscillating"]), 4)
+    return out

@@ -38,7 +38,7 @@ from harness.checks.bounds import Target, holds
 from harness.compare.evaluate import score_value
 from harness.compare.regions import caustic_region
 from reports.display import luminance
-from reports.records import ThresholdCheck
+from reports.records import Check
 
 __all__ = ["TARGET", "check_targets", "focus_measures", "target_measures"]
 
@@ -88,7 +88,7 @@ def _provenance(t: Target) -> str:
 
 
 def check_targets(targets, *, scene: str, method: str,
-                  measures: dict[str, float]) -> list[ThresholdCheck]:
+                  measures: dict[str, float]) -> list[Check]:
     """The targets of ``scene`` and ``method``; a measure the inputs did not allow
     is NaN, which fails."""
     checks = []
@@ -96,8 +96,8 @@ def check_targets(targets, *, scene: str, method: str,
         if t.scene != scene or t.method != method:
             continue
         value = measures.get(t.metric, float("nan"))
-        checks.append(ThresholdCheck(
-            metric=t.metric, region=t.region, view=t.view, bound=t.bound, kind=t.kind,
-            value=value, passed=holds(t.kind, t.bound, value), provenance=_provenance(t),
-            category=TARGET, gap=t.gap))
+        checks.append(Check(
+            metric=t.metric, region=t.region, view=t.view, bound=t.bound, relation=t.kind,
+            value=value, passed=holds(t.kind, t.bound, value), origin=_provenance(t),
+            kind=TARGET, gap=t.gap))
     return checks

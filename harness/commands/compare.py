@@ -8,7 +8,6 @@ and the others go on (:mod:`harness.compare.isolation`); the exit status is then
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import sys
 import time
@@ -18,11 +17,17 @@ from rich.console import Console
 from rich.table import Table
 
 from harness.checks import GOLDEN_DIR, KINDS, LOCKS_FILE
-from harness.checks.run import comparison_checks, count_by_kind, load_check_files
-from harness.commands.crosscheck import run_crosscheck
+from harness.checks.run import count_by_kind, load_check_files
 from harness.commands.scene import load_scenes
 from harness.compare.isolation import load_failure, run_scene, write_failure
-from harness.compare.pipeline import KNOWN_STUDIES, STUDIES, CompareOptions, compare_scene
+from harness.compare.pipeline import (
+    CheckOptions,
+    CompareOptions,
+    CrossCheckOptions,
+    default_studies,
+    known_studies,
+    run_comparison,
+)
 from harness.compare.staging import staged_output
 from harness.terminal import markup, plain
 from harness.writable import usable_cache
@@ -31,9 +36,10 @@ from renderers.mitsuba.cache import cache_dir
 from reports import scene_folder
 from reports.build import write_index
 from reports.records import SceneFailure
-from scenes import SCENES_DIR, Scene, SceneError, default_scene_path, parse_override, with_settings
+from scenes import Scene, SceneError, default_scene_path, parse_override, with_settings
 
-__all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "headline_lines", "summary_rows"]
+__all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "compare_options", "headline_lines",
+           "print_summary", "summary_rows"]
 
 #: Methods compared when none is named: both caustics-mapping presets.
 DEFAULT_METHODS = ("paper", "strong")
@@ -56,18 +62,19 @@ def summary_rows(comparisons) -> list[tuple[str, ...]]:
             floor = "" if m.noise_floor is None else f" ({m.noise_floor:.3g})"
             return f"{m.value:.3g}{floor}"
 
-        timing = c.provenance.get("caustics_mapping") or c.provenance.get("method") or {}
+        timing = c.provenance.method
         # The speedup's own scope (receiver-map passes) where there is one.
-        frame = timing.get("maps_time_ms", timing.get("frame_time_ms"))
+        frame = (timing.maps_time_ms if timing.maps_time_ms is not None
+                 else timing.frame_time_ms)
         speedup = (f"{c.speedup.speedup:.3g}x / {c.speedup_cold.speedup:.3g}x"
                    if c.speedup and c.speedup_cold else "–")
         if c.speedup_withheld is not None:  # not meaningful (harness.compare.headlines)
             speedup = f"withheld: {c.speedup_withheld.short}"
-        passed = sum(t.passed for t in c.thresholds)
-        gaps = sum(t.outcome == "known gap" for t in c.thresholds)
-        bounds = (f"{passed}/{len(c.thresholds)}"
+        passed = sum(t.passed for t in c.checks)
+        gaps = sum(t.outcome == "known gap" for t in c.checks)
+        bounds = (f"{passed}/{len(c.checks)}"
                   + (f" ({gaps} known gap{'s' if gaps > 1 else ''})" if gaps else "")
-                  if c.thresholds else "–")
+                  if c.checks else "–")
         rows.append((c.name, c.method, value("relmse"), value("ssim"), value("flip"),
                      value("flux_ratio", region="full"),
                      f"{frame:.1f}" if frame is not None and math.isfinite(frame) else "–",
@@ -87,7 +94,7 @@ def headline_lines(comparisons) -> list[str]:
 def check_count_lines(comparisons) -> list[str]:
     """One line per kind of accuracy check: how many were checked over every scene and
     method, and how they came out (plain text)."""
-    checks = [t for c in comparisons if not isinstance(c, SceneFailure) for t in c.thresholds]
+    checks = [t for c in comparisons if not isinstance(c, SceneFailure) for t in c.checks]
     counts = count_by_kind(checks)
     lines = []
     for kind in KINDS:
@@ -102,7 +109,7 @@ def check_count_lines(comparisons) -> list[str]:
     return lines
 
 
-def _print_summary(comparisons, out_dir: Path, seconds: float) -> None:
+def print_summary(comparisons, out_dir: Path, seconds: float) -> None:
     # Every cell may hold text from a scene file: escaped, or `[/]` is Rich markup.
     table = Table(title=markup(f"methods vs Mitsuba ({seconds:.0f} s) -> {out_dir}/index.html"),
                   caption="receiver 0, caustic region; (noise floor: an independent "
@@ -147,7 +154,8 @@ def _load(paths: list[str], overrides: dict) -> list[tuple[str, Scene | SceneErr
     return loaded
 
 
-def _options(args: argparse.Namespace, studies: tuple[str, ...]) -> CompareOptions:
+def compare_options(args: argparse.Namespace, studies: tuple[str, ...]) -> CompareOptions:
+    """The pipeline's options from the command line."""
     # An unwritable cache must not cost the run: render without it (one warning).
     use_cache = not args.no_cache and usable_cache(cache_dir(args.cache_dir))
     return CompareOptions(studies=studies, max_iterations=args.max_iterations,
@@ -156,11 +164,12 @@ def _options(args: argparse.Namespace, studies: tuple[str, ...]) -> CompareOptio
 
 
 def compare(args: argparse.Namespace) -> int:
-    """``caustics compare``: both renderers, every study, data files and the report.
+    """``caustics compare``: load, isolate each scene and method, run the comparison
+    pipeline (:func:`harness.compare.pipeline.run_comparison`), write.
 
     Returns 0; 1 when a scene failed (its row and page say why) or a checks file is
     missing; 3 when an accuracy check failed (not a known gap) and
-    ``--fail-on-thresholds`` asks for it; 2 for an unknown study.
+    ``--fail-on-checks`` asks for it; 2 for an unknown study.
     """
     start = time.perf_counter()
     overrides = dict(parse_override(item) for item in args.set or [])
@@ -168,11 +177,12 @@ def compare(args: argparse.Namespace) -> int:
         if getattr(args, name) is not None:
             overrides[name] = getattr(args, name)
     scenes = _load(args.scenes, overrides)
-    studies = tuple(s for s in (args.studies or ",".join(STUDIES)).split(",") if s)
-    unknown = sorted(set(studies) - set(KNOWN_STUDIES))
+    studies = (tuple(s for s in args.studies.split(",") if s) if args.studies
+               else default_studies())
+    unknown = sorted(set(studies) - set(known_studies()))
     if unknown:
         print(f"error: unknown study {', '.join(unknown)} "
-              f"(choose from {', '.join(KNOWN_STUDIES)})", file=sys.stderr)
+              f"(choose from {', '.join(known_studies())})", file=sys.stderr)
         return 2
     if getattr(args, "frames", None) is not None and "temporal" not in studies:
         print("error: --frames sets the temporal study's frames: add temporal to --studies "
@@ -181,26 +191,12 @@ def compare(args: argparse.Namespace) -> int:
     names = [*(args.preset or []), *(args.method or [])] or list(DEFAULT_METHODS)
     methods = [load_method(name) for name in dict.fromkeys(names)]
     # Every file is read before anything renders: a missing one is an error naming it.
-    check_files = load_check_files(Path(args.thresholds) if args.thresholds else LOCKS_FILE)
-    golden_dir = Path(args.golden) if args.golden else GOLDEN_DIR
-    options = _options(args, studies)
-
-    def run(scene, method):
-        comparison = compare_scene(scene, method=method, options=options)
-        checked = comparison_checks(method.configure(scene), method.name, comparison,
-                                    check_files, scenes_dir=SCENES_DIR, golden_dir=golden_dir)
-        comparison = dataclasses.replace(
-            comparison, thresholds=checked.checks,
-            provenance={**comparison.provenance,
-                        "accuracy_checks_not_applied": checked.not_applied})
-        if args.crosscheck:
-            cross = run_crosscheck(scene, photons=args.crosscheck_photons,
-                                   seeds=scene.settings.seeds,
-                                   other_photons=args.crosscheck_photons)
-            comparison = dataclasses.replace(
-                comparison, crosscheck=cross.table(),
-                provenance={**comparison.provenance, "crosscheck": cross.provenance})
-        return comparison
+    checks = CheckOptions(
+        files=load_check_files(Path(args.locks) if args.locks else LOCKS_FILE),
+        golden_dir=Path(args.golden) if args.golden else GOLDEN_DIR)
+    crosscheck = (CrossCheckOptions(photons=args.crosscheck_photons) if args.crosscheck
+                  else None)
+    options = compare_options(args, studies)
 
     items, rows, taken = [], [], []
     with staged_output(args.output) as out_dir:
@@ -212,15 +208,17 @@ def compare(args: argparse.Namespace) -> int:
                                                    self_contained=args.self_contained)
             else:
                 folder = scene_folder(f"{scene.name}-{method.name}", taken=taken)
-                item, row = run_scene(out_dir, folder, scene, method.name,
-                                      lambda s=scene, m=method: run(s, m),
-                                      self_contained=args.self_contained)
+                item, row = run_scene(
+                    out_dir, folder, scene, method.name,
+                    lambda s=scene, m=method: run_comparison(
+                        s, m, options=options, checks=checks, crosscheck=crosscheck),
+                    self_contained=args.self_contained)
             taken.append(folder)
             items.append(item)
             rows.append(row)
         write_index(out_dir, rows, self_contained=args.self_contained)
-    _print_summary(items, Path(args.output), time.perf_counter() - start)
+    print_summary(items, Path(args.output), time.perf_counter() - start)
     if any(isinstance(item, SceneFailure) for item in items):
         return 1
-    failed = [t for c in items for t in c.thresholds if t.outcome == "FAIL"]
-    return 3 if failed and args.fail_on_thresholds else 0
+    failed = [c for item in items for c in item.failed_checks]
+    return 3 if failed and args.fail_on_checks else 0

@@ -13,55 +13,30 @@ import argparse
 import json
 import sys
 
+from harness import loading
+from harness.loading import check_scenes
 from harness.terminal import plain
 from scenes import (
     EFFECTS,
     Problem,
-    SceneError,
-    default_scene_path,
     effects_of,
-    load_scene,
-    resolve_scene,
 )
-from scenes.geometry import build_geometry, scene_warnings
+from scenes.geometry import build_geometry
 from scenes.model import Scene
 from scenes.schema import describe_schema
 
-__all__ = ["check_scenes", "describe", "load_scenes", "schema", "validate"]
+__all__ = ["describe", "load_scenes", "print_warning", "schema", "validate"]
 
 
-def check_scenes(paths: list[str]) -> tuple[list[Scene], list[Problem], list[Problem]]:
-    """Load and fully validate scenes: ``(scenes, errors, warnings)``.
-
-    Each entry is a file path or a bundled scene name (:func:`scenes.resolve_scene`);
-    with none, the bundled default scene. Everything ``compare`` would refuse is an
-    error here (meshes and height files are read, the geometry checked); a scene
-    with an error is left out of ``scenes``.
-    """
-    scenes, problems, warnings = [], [], []
-    for path in paths or [str(default_scene_path())]:
-        try:
-            scene = load_scene(resolve_scene(path))
-            build_geometry(scene)
-            warnings += scene_warnings(scene)
-            scenes.append(scene)
-        except SceneError as error:
-            problems += error.problems
-    return scenes, problems, warnings
+def print_warning(warning: Problem) -> None:
+    """Print a scene warning as one ``warning: ...`` line on stderr."""
+    print(plain(f"warning: {warning}"), file=sys.stderr)
 
 
 def load_scenes(paths: list[str]) -> list[Scene]:
-    """Load and fully validate scenes (:func:`check_scenes`); print each warning as
-    one ``warning: ...`` line on stderr (``render``, ``compare`` and the other
-    commands load their scenes here). Raises one :class:`SceneError` holding the
-    problems of every file.
-    """
-    scenes, problems, warnings = check_scenes(paths)
-    for warning in warnings:
-        print(plain(f"warning: {warning}"), file=sys.stderr)
-    if problems:
-        raise SceneError(problems)
-    return scenes
+    """:func:`harness.loading.load_scenes`, each warning printed on stderr (every
+    command loads its scenes here)."""
+    return loading.load_scenes(paths, on_warning=print_warning)
 
 
 def _problem_dicts(problems: list[Problem]) -> list[dict[str, str]]:

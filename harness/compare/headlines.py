@@ -33,6 +33,9 @@ error it is computed for means nothing (``speedup_withheld``). Rules:
   it is undecided at this noise.
 * **budget**: a side's flux budget that does not add up to its emitted flux within
   :data:`BUDGET_CLOSURE` (1e-3).
+* **checks**: every accuracy check that failed (a known gap is not a failure), each
+  cited with its value and bound, first on the page. Headlines are made last in
+  the pipeline, after the checks, so that they can.
 """
 
 from __future__ import annotations
@@ -103,7 +106,7 @@ def speedup_reason(error: float, noise_floor: float | None, kind: str,
 
 def _noise_headlines(comparison: SceneComparison) -> list[Headline]:
     out = []
-    ref = comparison.provenance.get("reference") or {}
+    ref = comparison.provenance.reference
     noise, target = ref.get("relative_noise"), ref.get("target_noise")
     if (ref.get("stopped_by") == "budget" and noise is not None and target is not None
             and math.isfinite(noise) and noise > target):
@@ -125,7 +128,8 @@ def _noise_headlines(comparison: SceneComparison) -> list[Headline]:
 
 
 def _speedup(comparison: SceneComparison) -> tuple[Headline | None, SpeedupWithheld | None]:
-    warm, cold = comparison.speedup, comparison.speedup_cold
+    cost = comparison.section("cost")
+    warm, cold = (cost.speedup, cost.speedup_cold) if cost is not None else (None, None)
     if warm is None and cold is None:
         return None, None
     relmse = _relmse(comparison)
@@ -145,18 +149,27 @@ def _speedup(comparison: SceneComparison) -> tuple[Headline | None, SpeedupWithh
             SpeedupWithheld(reason=reason, warm=warm, cold=cold, short=short))
 
 
+def _checks_headline(comparison: SceneComparison) -> list[Headline]:
+    failed = comparison.failed_checks
+    if not failed:
+        return []
+    cited = "; ".join(f"{c.label} = {c.value:.4g}, bound {c.bound_text}" for c in failed)
+    return [Headline("checks", "warning", (
+        f"{len(failed)} accuracy check{'s' if len(failed) > 1 else ''} failed: {cited}."))]
+
+
 def headlines_for(comparison: SceneComparison) -> tuple[tuple[Headline, ...],
                                                          SpeedupWithheld | None]:
     """The banners of ``comparison`` and the speedup it withholds (module docstring)."""
-    out = _noise_headlines(comparison)
+    out = _checks_headline(comparison) + _noise_headlines(comparison)
     speedup, withheld = _speedup(comparison)
     if speedup is not None:
         out.append(speedup)
     for v in comparison.claim_verdicts:
         level = "warning" if v.verdict == "undecided at this noise" else "note"
         out.append(Headline("claim", level, f"Paper claim, {v.claim}: {v.text}."))
-    for side, table in (("method", comparison.method_budget),
-                        ("reference", comparison.reference_budget)):
+    for side, table in (("method", comparison.budgets.method),
+                        ("reference", comparison.budgets.reference)):
         closure = budget_closure(table)
         if closure is not None and closure > BUDGET_CLOSURE:
             out.append(Headline("budget", "warning", (
@@ -167,10 +180,7 @@ def headlines_for(comparison: SceneComparison) -> tuple[tuple[Headline, ...],
 
 
 def with_headlines(comparison: SceneComparison) -> SceneComparison:
-    """``comparison`` with its headlines, and its speedups withheld (set to None,
-    kept in ``speedup_withheld``) where they are not meaningful."""
+    """``comparison`` with its headlines, and its speedups withheld (kept in
+    ``speedup_withheld``, with the reason) where they are not meaningful."""
     headlines, withheld = headlines_for(comparison)
-    changes = {"headlines": headlines, "speedup_withheld": withheld}
-    if withheld is not None:
-        changes |= {"speedup": None, "speedup_cold": None}
-    return dataclasses.replace(comparison, **changes)
+    return dataclasses.replace(comparison, headlines=headlines, speedup_withheld=withheld)

@@ -14,34 +14,18 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from harness.compare.budget import REFERENCE_ROW
 from harness.compare.outputs import write_comparison, write_json
+from harness.compare.scoring import NoCausticError
 from harness.terminal import error_line
 from reports.build import write_page
 from reports.plots import write_pdfs
 from reports.records import SceneComparison, SceneFailure
 from scenes import Scene, SceneError
-from scenes.errors import HarnessError
 
-__all__ = ["FAILURE_JSON", "NoCausticError", "load_failure", "run_scene", "scene_failure",
-           "write_failure"]
+__all__ = ["FAILURE_JSON", "load_failure", "run_scene", "scene_failure", "write_failure"]
 
 #: Written into a failed scene's folder: the failure record as strict JSON.
 FAILURE_JSON = "failure.json"
-
-
-class NoCausticError(HarnessError):
-    """The reference puts no caustic light on any receiver: nothing to compare."""
-
-
-def _reference_caustic_watts(comparison: SceneComparison) -> float | None:
-    """The reference's caustic flux on the receivers (W), from the flux budget."""
-    if comparison.flux_budget is None:
-        return None
-    for row in comparison.flux_budget.records():
-        if row["item"] == REFERENCE_ROW:
-            return row["flux_w"]
-    return None
 
 
 def scene_failure(scene: Scene, method: str, error: BaseException, *, stage: str,
@@ -84,18 +68,20 @@ def run_scene(out_dir: Path, folder: str, scene: Scene, method: str,
     row : dict
         The index row (:func:`reports.build.write_page`).
     """
-    stage, comparison = "comparison", None
+    stage, comparison, no_caustic = "comparison", None, None
     try:
-        comparison = compare()
+        try:
+            comparison = compare()
+        except NoCausticError as error:
+            # The scene poses no question, but its files still say where the light went.
+            comparison, no_caustic = error.comparison, error
         stage = "data files"
-        write_comparison(out_dir / folder, comparison)
-        write_pdfs(out_dir / folder, comparison)
-        stage = "comparison"
-        if _reference_caustic_watts(comparison) == 0.0:
-            # Every metric of the caustic would be NaN: the scene failed to pose
-            # the question (its data files stay beside the failure page).
-            raise NoCausticError("no caustic: the reference puts no caustic light on any "
-                                 "receiver (check where the light, objects and receivers are)")
+        if comparison is not None:
+            write_comparison(out_dir / folder, comparison)
+            write_pdfs(out_dir / folder, comparison)
+        if no_caustic is not None:
+            stage = "comparison"
+            raise no_caustic
         stage = "report page"
         return comparison, write_page(out_dir, comparison, folder=folder,
                                       self_contained=self_contained)

@@ -12,7 +12,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from harness.compare.temporal_outputs import temporal_json, write_temporal_maps
+from harness.compare.temporal_outputs import write_temporal_maps
 from renderers.exr import write_exr
 from reports.records import METRIC_FORMULAS, SceneComparison, Table
 from scenes.files import atomic_write_bytes, dumps_strict
@@ -39,15 +39,15 @@ def _speedups(comparison: SceneComparison) -> dict[str, Any] | None:
     """Both equal-error speedups and the timing policy they follow, or None when
     no cost study ran. A withheld speedup keeps its values, with ``shown`` false and
     the reason (``harness.compare.headlines``)."""
-    if comparison.timing is None:
+    cost = comparison.section("cost")
+    if cost is None:
         return None
     withheld = comparison.speedup_withheld
-    warm = comparison.speedup or (withheld.warm if withheld else None)
-    cold = comparison.speedup_cold or (withheld.cold if withheld else None)
-    return {"warm": asdict(warm) if warm else None, "cold": asdict(cold) if cold else None,
+    return {"warm": asdict(cost.speedup) if cost.speedup else None,
+            "cold": asdict(cost.speedup_cold) if cost.speedup_cold else None,
             "shown": withheld is None,
             "withheld_because": withheld.reason if withheld else None,
-            **comparison.timing}
+            **cost.timing}
 
 
 def _records(table: Table | None) -> list[dict[str, Any]] | None:
@@ -56,8 +56,9 @@ def _records(table: Table | None) -> list[dict[str, Any]] | None:
 
 def budget_table(comparison: SceneComparison) -> Table | None:
     """Both sides' flux budgets in one table (``side`` first), for budget.csv."""
-    sides = [(side, t) for side, t in (("method", comparison.method_budget),
-                                       ("reference", comparison.reference_budget))
+    budgets = comparison.budgets
+    sides = [(side, t) for side, t in (("method", budgets.method),
+                                       ("reference", budgets.reference))
              if t is not None]
     if not sides:
         return None
@@ -77,42 +78,38 @@ def comparison_json(comparison: SceneComparison) -> dict[str, Any]:
         "exposure": comparison.exposure,
         "equal_error_speedup": _speedups(comparison),
         "claims": comparison.claims,
-        "thresholds": [asdict(t) for t in comparison.thresholds],
+        "checks": [asdict(t) for t in comparison.checks],
         "stability": comparison.stability,
-        "flux_budget": comparison.flux_budget.records() if comparison.flux_budget else None,
-        "budgets": {"method": _records(comparison.method_budget),
-                    "reference": _records(comparison.reference_budget),
-                    "reference_trace": comparison.budget_trace},
+        "flux_budget": _records(comparison.budgets.summary),
+        "budgets": {"method": _records(comparison.budgets.method),
+                    "reference": _records(comparison.budgets.reference),
+                    "reference_trace": comparison.budgets.trace},
         "headlines": [asdict(h) for h in comparison.headlines],
         "claim_verdicts": [asdict(v) for v in comparison.claim_verdicts],
         "crosscheck": comparison.crosscheck.records() if comparison.crosscheck else None,
-        "provenance": comparison.provenance,
-        "temporal": temporal_json(comparison.temporal),
-        "decomposition": (comparison.decomposition.as_dict()
-                          if comparison.decomposition is not None else None),
+        "provenance": comparison.provenance.as_dict(),
+        "studies": {s.name: s.as_dict() for s in comparison.sections},
         "files": comparison.files,
     }
 
 
+
 def write_comparison(scene_dir: str | Path, comparison: SceneComparison) -> None:
-    """Write metrics.json, convergence.csv, cost_accuracy.csv, flux_budget.csv (both
-    sides' budgets, :func:`budget_table`), temporal.csv with the
-    temporal maps (``harness.compare.temporal_outputs``), decomposition.csv and the EXR originals
-    named in ``comparison.files`` (keys ``<view>/<kind>`` of ``comparison.images``)."""
+    """Write metrics.json, each study section's tables (``convergence.csv``,
+    ``cost_accuracy.csv``, ``temporal.csv``, ``decomposition.csv``, a plug-in's own),
+    the temporal maps (``harness.compare.temporal_outputs``), flux_budget.csv (both
+    sides' budgets, :func:`budget_table`) and the EXR originals named in
+    ``comparison.files`` (keys ``<view>/<kind>`` of ``comparison.images``)."""
     scene_dir = Path(scene_dir)
     for key, name in comparison.files.items():
         image = comparison.images[key]
         layer = image if image.ndim == 3 else image[..., None].repeat(3, axis=2)
         write_exr(scene_dir / name, {"RGB": layer})
-    if comparison.convergence is not None:
-        write_table(scene_dir / "convergence.csv", comparison.convergence)
-    if comparison.cost is not None:
-        write_table(scene_dir / "cost_accuracy.csv", comparison.cost)
+    for section in comparison.sections:
+        for name, table in section.tables().items():
+            write_table(scene_dir / name, table)
     if comparison.temporal is not None:
-        write_table(scene_dir / comparison.temporal.files["table"], comparison.temporal.table)
         write_temporal_maps(scene_dir, comparison.temporal)
-    if comparison.decomposition is not None:
-        write_table(scene_dir / "decomposition.csv", comparison.decomposition.table)
     budgets = budget_table(comparison)
     if budgets is not None:
         write_table(scene_dir / "flux_budget.csv", budgets)

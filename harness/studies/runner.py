@@ -46,17 +46,20 @@ class RealtimeRunner:
     Use as a context manager so the GL context is released.
     """
 
-    def __init__(self, scene: Scene, *, repeats: int = 3):
+    def __init__(self, scene: Scene, *, repeats: int = 3, ctx=None):
         # Driver start-up (the EGL display, the device choice) is excluded as the
         # Dr.Jit backend's is on the reference side (it happens at import): only
         # the first context in a process pays it, so timing it would make the
-        # first runner's build time differ from every later one's.
-        create_context().release()
+        # first runner's build time differ from every later one's. A context handed
+        # in (a sweep worker's, made once per process) is kept, not released.
+        self._own = ctx is None
+        if self._own:
+            create_context().release()
         start = time.perf_counter()
         self.scene = scene
         self.geometry = build_geometry(scene)
         self.repeats = repeats
-        self.ctx = create_context()
+        self.ctx = create_context() if self._own else ctx
         #: The one-off set-up (s): the scene's meshes and the GL context.
         self.build_s = time.perf_counter() - start
         self._first: dict[tuple, dict[str, float]] = {}
@@ -73,7 +76,8 @@ class RealtimeRunner:
         return self
 
     def __exit__(self, *exc) -> None:
-        self.ctx.release()
+        if self._own:
+            self.ctx.release()
 
     def render(self, **overrides: Any):
         """One frame (``renderers.caustics_mapping.renderer.Frame``) with overrides."""

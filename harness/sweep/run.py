@@ -65,7 +65,7 @@ class RowResult:
         ``relmse``, ``ssim``, ``flip``, ``flux_ratio`` (:data:`.rows.KEY_VALUES`),
         ``relmse_noise_floor``; empty for a failed row.
     time_warm_ms : float or None
-        The method's warm frame time (:class:`.rows.MethodRender`).
+        The method's warm frame time (:class:`.rows.RowRender`).
     worker : str
         The worker that rendered the row ("" when it failed before rendering).
     cached : bool
@@ -109,12 +109,13 @@ class SweepRun:
 
 def _row_record(job: RowJob, comparison: SceneComparison, render) -> dict:
     """The values a results-cache entry keeps for a row."""
-    reference = comparison.provenance.get("reference", {})
+    reference = comparison.provenance.reference
+    timed = render.timed
     return {"scene": job.scene.name, "method": job.method,
             "setting": {k: v for k, v in job.setting.items},
             "values": row_values(comparison),
-            "time_warm_ms": render.warm_seconds * 1e3, "worker": render.worker,
-            "details": {"timer": render.timer, "gl_renderer": render.gl_renderer,
+            "time_warm_ms": timed.warm_seconds * 1e3, "worker": render.worker,
+            "details": {"timer": timed.timer, "gl_renderer": timed.gl_renderer,
                         "reference_noise": reference.get("relative_noise"),
                         "reference_photons": reference.get("photons"),
                         "reference_seeds": reference.get("seeds")}}

@@ -52,12 +52,12 @@ def test_compare_summary_prints_hostile_names_safely(capsys):
     `evil[/]<ESC>[31m...` (and a failed one) prints every name literally; before,
     Rich raised MarkupError after the whole run, and ANSI escapes reached the
     terminal raw."""
-    from harness.commands.compare import _print_summary  # noqa: PLC0415 - loads renderers
+    from harness.commands.compare import print_summary  # noqa: PLC0415 - loads renderers
 
-    comparison = replace(make_comparison(name=HOSTILE, thresholds=False), method="pa[/]per")
+    comparison = replace(make_comparison(name=HOSTILE, checks=False), method="pa[/]per")
     failure = SceneFailure(name=HOSTILE, method="strong", source="x.toml",
                            error="ValueError: boom [/]", stage="comparison")
-    _print_summary([comparison, failure], Path("/tmp/out[/]"), 1.0)
+    print_summary([comparison, failure], Path("/tmp/out[/]"), 1.0)
     captured = capsys.readouterr()
     assert "\x1b" not in captured.out + captured.err
     assert "evil[/]" in captured.out and "pa[/]per" in captured.out

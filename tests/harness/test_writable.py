@@ -132,14 +132,14 @@ def test_compare_options_leave_an_unwritable_cache_out(tmp_path, capsys):
     """Regression lock: compare's options turn the cache off (one warning) when its
     folder cannot be written, and keep it on otherwise."""
     from harness.cli import build_parser  # noqa: PLC0415
-    from harness.commands.compare import _options  # noqa: PLC0415 - loads the renderers
+    from harness.commands.compare import compare_options  # noqa: PLC0415 - loads the renderers
 
     blocker = tmp_path / "cache"
     blocker.write_text("")
     args = build_parser().parse_args(["compare", "-o", str(tmp_path / "o"),
                                       "--cache-dir", str(blocker)])
-    assert _options(args, ("metrics",)).use_cache is False
+    assert compare_options(args, ("metrics",)).use_cache is False
     assert "warning: reference cache" in capsys.readouterr().err
     args = build_parser().parse_args(["compare", "-o", str(tmp_path / "o"),
                                       "--cache-dir", str(tmp_path / "ok")])
-    assert _options(args, ("metrics",)).use_cache is True
+    assert compare_options(args, ("metrics",)).use_cache is True

@@ -25,7 +25,16 @@ from harness.metrics import (
 )
 from harness.studies.pareto import equal_error_speedup, pareto_front
 from reports import images
-from reports.records import MetricValue, SceneComparison, Table, ThresholdCheck
+from reports.records import (
+    Check,
+    ConvergenceSection,
+    CostSection,
+    MethodProvenance,
+    MetricValue,
+    Provenance,
+    SceneComparison,
+    Table,
+)
 
 #: Markup that must render as text: a script, an event handler, a closing tag.
 HOSTILE_NAME = '<script>window.__pwned = 1</script><b>bold</b>/../x'
@@ -133,7 +142,7 @@ def cost_table(rng) -> tuple[Table, float, float]:
 def make_comparison(*, name: str = "glass_sphere",
                     description: str = "Glass sphere over a diffuse floor, point light",
                     camera: tuple[int, int] = (96, 128), receiver: tuple[int, int] = (64, 64),
-                    seed: int = 0, thresholds: bool = True,
+                    seed: int = 0, checks: bool = True,
                     variance: bool = False) -> SceneComparison:
     """A complete comparison of one synthetic scene (camera image + one receiver map);
     ``variance`` adds ``<view>/reference_variance`` to both views."""
@@ -147,20 +156,20 @@ def make_comparison(*, name: str = "glass_sphere",
     reference = [row for row in cost.records() if row["series"] == "reference"]
     speedup = equal_error_speedup(method_time, method_error, [r["time_warm_s"] for r in reference],
                                   [r["relmse"] for r in reference])
-    checks = ()
-    if thresholds:
+    found = ()
+    if checks:
         ssim = next(m for m in metrics if (m.view, m.region, m.metric)
                     == ("receiver0", "caustic", "ssim")).value
         relmse = next(m for m in metrics if (m.view, m.region, m.metric)
                       == ("receiver0", "caustic", "relmse")).value
-        checks = (
-            ThresholdCheck("ssim", "caustic", "receiver0", 0.5, "min", ssim, ssim >= 0.5,
-                           "spread 0.01 over 4 seeds, margin 3σ"),
-            ThresholdCheck("relmse", "caustic", "receiver0", relmse / 2, "max", relmse, False,
-                           "deliberately tight for the test"),
-            ThresholdCheck("flux agreement", "full", "all", 0.02, "band", 1.09, False,
-                           "2 % (Weber fraction)", category="physical requirement",
-                           gap="a known gap, for the test"),
+        found = (
+            Check("ssim", "caustic", "receiver0", 0.5, "min", ssim, ssim >= 0.5,
+                  "spread 0.01 over 4 seeds, margin 3σ"),
+            Check("relmse", "caustic", "receiver0", relmse / 2, "max", relmse, False,
+                  "deliberately tight for the test"),
+            Check("flux agreement", "full", "all", 0.02, "band", 1.09, False,
+                  "2 % (Weber fraction)", kind="physical requirement",
+                  gap="a known gap, for the test"),
         )
     return SceneComparison(
         name=name, description=description, source=f"scenes/{name}.toml",
@@ -173,20 +182,26 @@ def make_comparison(*, name: str = "glass_sphere",
         exposure={"white": {"camera": cam_white, "receiver0": rec_white},
                   "flip_start": -4.0, "flip_stop": 2.0,
                   "diff_range": {"camera": cam_range, "receiver0": rec_range}},
-        convergence=convergence_table(rng),
-        cost=cost, speedup=speedup, speedup_point=(method_time, method_error),
-        claims={"one iteration is enough for rendering": "holds: relMSE 0.012 at iteration 1",
-                "error negligible after five iterations": "holds: mean error 0.02 texels"},
-        provenance={"passes": ["receiver_positions", "object_front", "object_back",
-                               "caustic_map", "shadow_map", "final"],
-                    "event_chains": ["L T T D"], "photons": 10_000_000, "spp": 1024,
-                    "seeds": [1, 2, 3, 4], "versions": {"mitsuba": "3.9.0", "drjit": "1.5.0"},
-                    "timings_s": {"caustics_mapping": 0.012, "reference": 42.0},
-                    "timer": "ctx.finish + perf_counter", "machine": "method fixture",
-                    "reference_cache_hit": True},
+        sections=(
+            ConvergenceSection(convergence_table(rng), claims={
+                "one iteration is enough for rendering": "holds: relMSE 0.012 at iteration 1",
+                "error negligible after five iterations": "holds: mean error 0.02 texels"}),
+            CostSection(cost, speedup=speedup, point=(method_time, method_error))),
+        method="paper", method_description="the paper's choices",
+        provenance=Provenance(
+            scene_file=f"scenes/{name}.toml",
+            method=MethodProvenance(
+                name="paper", renderer="caustics mapping", timer="ctx.finish + perf_counter",
+                frame_time_ms=12.0, preset="paper",
+                passes=("receiver_positions", "object_front", "object_back", "caustic_map",
+                        "shadow_map", "final")),
+            reference={"event_chains": ["L T T D"], "photons": 10_000_000, "spp": 1024,
+                       "seeds": [1, 2, 3, 4], "versions": {"mitsuba": "3.9.0", "drjit": "1.5.0"},
+                       "timings_s": {"reference": 42.0}, "cache": "hit"},
+            machine={"platform": "method fixture"}),
         files={"camera/method": "camera_method.exr", "camera/reference": "camera_ref.exr",
                "receiver0/method": "receiver0_method.exr"},
-        thresholds=checks,
+        checks=found,
         stability={"hard_cases": 3, "nan_or_inf": 0, "lost_splats": 12, "outcome": "pass"},
     )
 
@@ -215,7 +230,7 @@ def comparison() -> SceneComparison:
 def hostile_comparison() -> SceneComparison:
     """A scene whose name and description carry HTML and script tags."""
     return make_comparison(name=HOSTILE_NAME, description=HOSTILE_DESCRIPTION, seed=1,
-                           thresholds=False)
+                           checks=False)
 
 
 @pytest.fixture(scope="session")

@@ -24,7 +24,7 @@ import pytest
 from PIL import Image
 
 from harness.studies.temporal import compare_sequences
-from reports.records import SceneComparison
+from reports.records import RecordSection, SceneComparison
 from reports.temporal_records import TemporalComparison
 from tests.reports.test_browser import CHROMIUM, CHROMIUM_ARGS, PageLog
 
@@ -70,7 +70,8 @@ def make_temporal(*, shimmer: float = 0.05, seed: int = 0, frames: int = FRAMES,
 def with_temporal(comparison: SceneComparison, temporal: TemporalComparison, *,
                   method: str | None = None) -> SceneComparison:
     """``comparison`` with the temporal record (and another method name)."""
-    return dataclasses.replace(comparison, temporal=temporal,
+    section = RecordSection("temporal", "Temporal stability", temporal, temporal.files["table"])
+    return dataclasses.replace(comparison.with_section(section),
                                method=method or comparison.method)
 
 

@@ -138,7 +138,7 @@ def test_checks_pass_fail_gaps_and_none_by_kind(linked, embedded):
 
 def test_provenance_settings_and_claims_are_shown(linked, comparison):
     html = (linked / "glass_sphere-paper" / "index.html").read_text("utf-8")
-    for text in ("caustic_map", "L T T D", "3.9.0", "reference_cache_hit",
+    for text in ("caustic_map", "L T T D", "3.9.0", "frame_time_ms",
                  "scenes/glass_sphere.toml", "refraction.double",
                  "one iteration is enough for rendering", "lost_splats"):
         assert text in html, text
@@ -195,10 +195,9 @@ def test_plots_are_valid_svg_with_the_pareto_front(linked):
 
 
 def test_optional_parts_may_be_missing(tmp_path, comparison):
-    """No studies, no thresholds, no receiver, no provenance: the page still builds
+    """No studies, no checks, no receiver: the page still builds
     and says what was not run."""
-    c = replace(comparison, convergence=None, cost=None, speedup=None, speedup_point=None,
-                claims={}, provenance={}, files={}, thresholds=(), stability=None,
+    c = replace(comparison, sections=(), files={}, checks=(), stability=None,
                 images={k: v for k, v in comparison.images.items() if k.startswith("camera/")})
     build_report(tmp_path, [c])
     html = (tmp_path / "glass_sphere-paper" / "index.html").read_text("utf-8")
@@ -231,8 +230,8 @@ def test_crosscheck_section_shows_the_result_when_one_was_run(tmp_path, comparis
                   (("total", "all", 1.0, 4.8402, 4.8368, 1.0007, 0.0703, 0.17, 0.41, 0.5, True),
                    ("region", "block (3, 4)", 0.011, 0.05, 0.048, 1.0473, 4.73, 5.06, 0.93, 2.0,
                     False)))
-    provenance = {**comparison.provenance, "crosscheck": {
-        "transport": "full: all L S+ D paths", "other": {"renderer": "luxcore LIGHTCPU"}}}
+    provenance = replace(comparison.provenance, crosscheck={
+        "transport": "full: all L S+ D paths", "other": {"renderer": "luxcore LIGHTCPU"}})
     checked = replace(comparison, name="checked", crosscheck=table, provenance=provenance)
     build_report(tmp_path, [checked, comparison])
     page = unescape((tmp_path / "checked-paper" / "index.html").read_text("utf-8"))

@@ -10,7 +10,7 @@ from html import unescape
 import pytest
 
 from reports import build_report
-from reports.records import MetricValue, SceneFailure, Table
+from reports.records import FluxBudgets, MetricValue, SceneFailure, Table
 from tests.reports.conftest import HOSTILE_NAME
 
 BUDGET = Table(("item", "flux_w", "fraction"), (
@@ -28,7 +28,7 @@ def _text(path) -> str:
 def _with_flux_ratio(comparison, ratio):
     metrics = tuple(replace(m, value=ratio) if (m.view, m.region, m.metric)
                     == ("receiver0", "full", "flux_ratio") else m for m in comparison.metrics)
-    return replace(comparison, metrics=metrics, flux_budget=BUDGET)
+    return replace(comparison, metrics=metrics, budgets=FluxBudgets(summary=BUDGET))
 
 
 def test_failure_gets_a_row_and_a_page_and_the_others_are_intact(tmp_path, comparison):
@@ -71,7 +71,8 @@ def test_flux_budget_is_shown_when_the_flux_ratio_is_far_from_one(tmp_path, comp
 def test_no_flux_budget_without_a_flux_ratio(tmp_path, comparison):
     """Regression lock: a comparison without a receiver flux ratio shows no budget."""
     metrics = tuple(m for m in comparison.metrics if m.metric != "flux_ratio")
-    build_report(tmp_path, [replace(comparison, metrics=metrics, flux_budget=BUDGET)])
+    build_report(tmp_path, [replace(comparison, metrics=metrics,
+                                    budgets=FluxBudgets(summary=BUDGET))])
     assert "Flux budget" not in _text(next(p for p in tmp_path.glob("*/index.html")))
 
 

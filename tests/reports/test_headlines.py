@@ -21,6 +21,7 @@ from harness.compare.probe import ReferenceBudget
 from harness.studies.claims import five_iterations_verdict, one_iteration_verdict
 from renderers.results import ReceiverMap
 from reports import build_report
+from reports.records import ConvergenceSection, FluxBudgets
 
 
 def _page(tmp_path, comparison) -> tuple[str, str]:
@@ -37,12 +38,18 @@ def _with_relmse(comparison, value, *, floor=None):
         replace(m, value=value, noise_floor=m.noise_floor if floor is None else floor)
         if (m.view, m.region, m.metric) == ("receiver0", "caustic", "relmse") else m
         for m in comparison.metrics)
-    point = (comparison.speedup_point[0], value)
-    return replace(comparison, metrics=metrics, speedup_point=point)
+    cost = comparison.section("cost")
+    return replace(comparison.with_section(replace(cost, point=(cost.point[0], value))),
+                   metrics=metrics)
+
+
+def _with_cost(comparison, **changes):
+    """``comparison`` with its cost section's fields changed."""
+    return comparison.with_section(replace(comparison.section("cost"), **changes))
 
 
 def _reference(comparison, **reference):
-    return replace(comparison, provenance={**comparison.provenance, "reference": reference})
+    return replace(comparison, provenance=replace(comparison.provenance, reference=reference))
 
 
 def test_reference_that_missed_its_noise_target_gets_a_banner(tmp_path, comparison):
@@ -91,11 +98,10 @@ def test_speedup_is_withheld_when_the_error_is_enormous(tmp_path, comparison):
     assert f"{comparison.speedup.speedup:.4g}×" in html
     assert "withheld" not in text.lower()
     assert "withheld" not in summary_rows([shown])[0][7]
-    assert comparison_json(shown)["equal_error_speedup"] is None  # no timing policy here
-    assert RELMSE_USABLE == 1.0
+    assert comparison_json(shown)["equal_error_speedup"]["shown"] is True
     timing = {"policy": "warm and cold", "method": {"build_s": 0.1, "compile_s": 0.2},
               "reference": {"build_s": 0.3, "compile_s": 0.4}}
-    bad = with_headlines(replace(_with_relmse(comparison, 3.6), timing=timing))
+    bad = with_headlines(_with_cost(_with_relmse(comparison, 3.6), timing=timing))
     assert bad.speedup is None and bad.speedup_withheld.warm == comparison.speedup
     html, text = _page(tmp_path / "bad", bad)
     assert f"{comparison.speedup.speedup:.4g}×" not in html
@@ -116,15 +122,15 @@ def test_speedup_is_withheld_beyond_the_reference_curve(comparison):
     curve = [r["relmse"] for r in comparison.cost.records() if r["series"] == "reference"]
     best, worst = min(curve), max(curve)
     floor = 1e-9  # far below both errors: the noise floor does not decide here
-    far = with_headlines(_with_relmse(replace(comparison, speedup=replace(
+    far = with_headlines(_with_relmse(_with_cost(comparison, speedup=replace(
         comparison.speedup, kind="extrapolated")), best / (2 * EXTRAPOLATION_LIMIT),
         floor=floor))
     assert far.speedup_withheld is not None and "extrapolation" in far.speedup_withheld.reason
-    near = with_headlines(_with_relmse(replace(comparison, speedup=replace(
+    near = with_headlines(_with_relmse(_with_cost(comparison, speedup=replace(
         comparison.speedup, kind="extrapolated")), best / (EXTRAPOLATION_LIMIT / 2),
         floor=floor))
     assert near.speedup_withheld is None and near.speedup is not None
-    above = with_headlines(_with_relmse(replace(comparison, speedup=replace(
+    above = with_headlines(_with_relmse(_with_cost(comparison, speedup=replace(
         comparison.speedup, kind="bound")), 0.5 * (worst + RELMSE_USABLE), floor=floor))
     assert above.speedup_withheld is not None and "upper bound" in above.speedup_withheld.reason
 
@@ -139,8 +145,9 @@ def test_a_claim_within_twice_its_uncertainty_reads_undecided(tmp_path, comparis
     one = one_iteration_verdict({0: 0.5, 1: 0.111, 8: 0.1}, standard_error=0.012)
     five = five_iterations_verdict({0: 40.0, 5: 0.4}, standard_error=0.05)
     assert one.verdict == "undecided at this noise" and five.verdict == "holds"
-    c = with_headlines(replace(comparison, claims={v.claim: v.text for v in (five, one)},
-                               claim_verdicts=(five, one)))
+    c = with_headlines(comparison.with_section(ConvergenceSection(
+        comparison.convergence, claims={v.claim: v.text for v in (five, one)},
+        claim_verdicts=(five, one))))
     html, text = _page(tmp_path, c)
     assert text.count("undecided at this noise: receiver relMSE after 1 iteration") == 2
     assert "ratio 1.110 ± 0.012; claim allows 1.10" in text
@@ -174,9 +181,9 @@ def test_budget_panel_shows_both_sides_and_the_trace(tmp_path, comparison):
         share={"missed": 1 / 3, "deposited": 2 / 3},
         share_se={"missed": 1e-4, "deposited": 1e-4}, maps_flux_w=np.full(3, 2.0),
         seconds=1.25, event_chains=["L T T D (objects[0])"])
-    c = with_headlines(replace(comparison, method_budget=method,
-                               reference_budget=reference_budget_table(reference),
-                               budget_trace=reference.provenance()))
+    c = with_headlines(replace(comparison, budgets=FluxBudgets(
+        method=method, reference=reference_budget_table(reference),
+        trace=reference.provenance())))
     html, text = _page(tmp_path, c)
     assert 'id="budget-method"' in html and 'id="budget-reference"' in html
     assert "<svg" in html and "share of each side's emitted flux" in text.lower()

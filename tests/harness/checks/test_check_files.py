@@ -61,7 +61,7 @@ def test_locks_apply(tmp_path):
                MetricValue("camera", "object_masked", "ssim", math.nan)]
     checks = check_locks("s", metrics, locks)
     assert [c.passed for c in checks] == [True, False, False]  # NaN never passes
-    assert {c.category for c in checks} == {"regression lock"}
+    assert {c.kind for c in checks} == {"regression lock"}
     assert check_locks("other", metrics, locks) == ()
 
 
@@ -122,7 +122,7 @@ def test_a_target_missed_today_is_a_known_gap_not_a_failure(tmp_path):
     missed = check_targets(targets, scene="s", method="m",
                            measures={"relmse": 0.02, "flux_ratio": 1.05})
     assert [c.outcome for c in missed] == ["known gap", "FAIL"]
-    assert {c.category for c in missed} == {"method target"}
+    assert {c.kind for c in missed} == {"method target"}
     reached = check_targets(targets, scene="s", method="m",
                             measures={"relmse": 0.005, "flux_ratio": 1.0})
     assert [c.outcome for c in reached] == ["gap closed", "pass"]

@@ -40,7 +40,7 @@ def test_compare_writes_everything_and_reuses_the_cache(tmp_path, capsys):
     assert "paper" in summary and "strong" in summary
     strong = json.loads((out / "glass_sphere-strong" / "metrics.json").read_text())
     assert strong["method"]["name"] == "strong"
-    assert strong["provenance"]["caustics_mapping"]["preset"] == "strong"
+    assert strong["provenance"]["method"]["preset"] == "strong"
     assert strong["settings"]["splat"] == "triangles"
     assert strong["provenance"]["reference"]["cache"] == "hit"    # shared with paper
     index = (out / "index.html").read_text()
@@ -59,7 +59,7 @@ def test_compare_writes_everything_and_reuses_the_cache(tmp_path, capsys):
     assert all(text.startswith(("holds", "does not hold", "undecided at this noise",
                                 "not measured"))
                for text in data["claims"].values())
-    assert "caustic_map" in data["provenance"]["caustics_mapping"]["passes"]
+    assert "caustic_map" in data["provenance"]["method"]["passes"]
     assert data["provenance"]["reference"]["event_chains"]
     for name in data["files"].values():
         assert (folder / name).is_file(), name
@@ -107,19 +107,19 @@ def test_compare_checks_every_kind_like_the_test_suite(tmp_path, capsys, monkeyp
     paper preset's spurious TIR in a sphere is a known gap, not a failure), the
     regression locks at the golden settings (all five hold); the method targets only
     at the scene's own settings, so not with a reduced photon budget (and the report
-    says why). With 0 iterations a lock fails and --fail-on-thresholds exits 3. A
+    says why). With 0 iterations a lock fails and --fail-on-checks exits 3. A
     modified copy of the scene gets the physical requirements only."""
     monkeypatch.chdir(REPO)
     out, cache = tmp_path / "out", tmp_path / "cache"
     fast = ["--studies", "metrics", "--cache-dir", str(cache), "-q", "--set",
             "photons=50000", "--set", "seeds=2", "--set", "spp=1", "--preset", "paper"]
     scene = str(SCENES / "glass_sphere.toml")
-    assert main(["compare", scene, "-o", str(out), *fast, "--fail-on-thresholds"]) == 0
+    assert main(["compare", scene, "-o", str(out), *fast, "--fail-on-checks"]) == 0
     summary = capsys.readouterr().out
     data = json.loads((out / "glass_sphere-paper" / "metrics.json").read_text())
     by_kind = {}
-    for t in data["thresholds"]:
-        by_kind.setdefault(t["category"], []).append(t)
+    for t in data["checks"]:
+        by_kind.setdefault(t["kind"], []).append(t)
     assert len(by_kind["regression lock"]) == 5
     assert all(t["passed"] for t in by_kind["regression lock"])
     physical = {t["metric"]: t for t in by_kind["physical requirement"]}
@@ -127,20 +127,20 @@ def test_compare_checks_every_kind_like_the_test_suite(tmp_path, capsys, monkeyp
             "reference focus"} <= set(physical)
     assert physical["no TIR in a sphere"]["gap"] and not physical["no TIR in a sphere"]["passed"]
     assert "method target" not in by_kind
-    assert "settings differ" in data["provenance"]["accuracy_checks_not_applied"]["method target"]
+    assert "settings differ" in data["provenance"]["checks_not_applied"]["method target"]
     assert f"physical requirements checked: {len(physical)} (" in summary
     assert "1 known gap)" in summary
     assert "regression locks checked: 5 (5 passed)" in summary
     assert "method targets checked: 0 (0 passed)" in summary
     assert main(["compare", scene, "-o", str(out), *fast, "--iterations", "0",
-                 "--fail-on-thresholds"]) == 3
+                 "--fail-on-checks"]) == 3
     data = json.loads((out / "glass_sphere-paper" / "metrics.json").read_text())
-    locks = [t for t in data["thresholds"] if t["category"] == "regression lock"]
+    locks = [t for t in data["checks"] if t["kind"] == "regression lock"]
     assert not all(t["passed"] for t in locks)
     copy = _small_scene(tmp_path)
     assert main(["compare", str(copy), "-o", str(tmp_path / "copy"), *fast]) == 0
     data = json.loads((tmp_path / "copy" / "glass_sphere-paper" / "metrics.json").read_text())
-    assert {t["category"] for t in data["thresholds"]} == {"physical requirement"}
+    assert {t["kind"] for t in data["checks"]} == {"physical requirement"}
 
 
 def test_compare_by_bundled_name_from_any_directory(tmp_path, monkeypatch, capsys):
@@ -154,14 +154,14 @@ def test_compare_by_bundled_name_from_any_directory(tmp_path, monkeypatch, capsy
     assert main(argv) == 0
     data = json.loads((out / "glass_sphere-paper" / "metrics.json").read_text())
     assert data["scene"]["source"].endswith("scenes/glass_sphere.toml")
-    locks = [t for t in data["thresholds"] if t["category"] == "regression lock"]
+    locks = [t for t in data["checks"] if t["kind"] == "regression lock"]
     assert locks, "the bundled locks were not checked"
     assert {t["view"] for t in locks} == {"receiver0"}
     assert data["files"]["receiver0/method"] == "receiver0_method.exr"
     assert (out / "glass_sphere-paper" / "receiver0_method.exr").is_file()
 
 
-def test_missing_thresholds_file_is_an_error(tmp_path, capsys):
+def test_missing_locks_file_is_an_error(tmp_path, capsys):
     """A named locks file that does not exist stops the run before anything renders,
     with one line naming it, and exit 1 even with --fail-on-thresholds; it never
     means "no checks"."""

@@ -35,13 +35,13 @@ def test_one_failing_scene_costs_only_its_row(tmp_path, monkeypatch, capsys):
     raises; the index lists both scenes (one failure row), the good one has its page
     and data, the failed one its page and failure.json, stderr names the failure in
     one line, no staging folder is left, and the exit status is 1."""
-    def fake_compare(scene, *, method, options):
+    def fake_compare(scene, method, **kwargs):
         if scene.name == "broken":
             raise ValueError("Data cannot be log-scaled because all values are <= 0.")
-        return make_comparison(name=scene.name, thresholds=False, camera=(24, 32),
+        return make_comparison(name=scene.name, checks=False, camera=(24, 32),
                                receiver=(16, 16))
 
-    monkeypatch.setattr(command, "compare_scene", fake_compare)
+    monkeypatch.setattr(command, "run_comparison", fake_compare)
     good, bad = _scene(tmp_path, "good"), _scene(tmp_path, "broken")
     out = tmp_path / "out"
     assert main(["compare", str(bad), str(good), "-o", str(out), "--preset", "paper",
@@ -66,14 +66,14 @@ def test_real_run_with_a_caustic_free_scene_and_a_failing_one(tmp_path, monkeypa
     the flux budget, its data files beside it; a scene whose comparison raises and a
     scene that does not validate (zero intensity) get failure rows; the good scene
     completes; exit 1. ``validate`` predicts the no-caustic failure (its probe)."""
-    real = command.compare_scene
+    real = command.run_comparison
 
-    def compare(scene, *, method, options):
+    def compare(scene, method, **kwargs):
         if scene.name == "broken":
             raise RuntimeError("injected failure")
-        return real(scene, method=method, options=options)
+        return real(scene, method, **kwargs)
 
-    monkeypatch.setattr(command, "compare_scene", compare)
+    monkeypatch.setattr(command, "run_comparison", compare)
     good = _scene(tmp_path, "good")
     dark = _scene(tmp_path, "nocaustic", **{"center = [0.0, 0.0, 0.0]": "center = [6.0, 6.0, 0.0]",
                                             "size = [8.0, 8.0]": "size = [1.0, 1.0]"})

@@ -69,7 +69,7 @@ def test_temporal_study_writes_its_table_metrics_maps_and_animation(run, preset)
     assert [float(r["time_s"]) for r in table] == pytest.approx([i / 30 for i in range(FRAMES)])
 
     data = _strict((folder / "metrics.json").read_text("utf-8"))
-    temporal = data["temporal"]
+    temporal = data["studies"]["temporal"]
     assert temporal["frames"] == FRAMES and temporal["fps"] == 30.0
     for region in ("caustic", "full"):
         f = temporal["flicker"][region]

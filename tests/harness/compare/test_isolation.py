@@ -4,6 +4,7 @@ next scene is unaffected."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -11,7 +12,7 @@ import numpy as np
 from harness.compare import isolation
 from harness.compare.isolation import FAILURE_JSON, run_scene
 from reports.build import write_index
-from reports.records import SceneComparison, SceneFailure, Table
+from reports.records import FluxBudgets, SceneFailure, Table
 from tests.reports.conftest import make_comparison
 
 SCENE = SimpleNamespace(name="broken", source="/scenes/broken.toml",
@@ -38,9 +39,9 @@ def test_failure_after_the_comparison_keeps_its_flux_budget(tmp_path, monkeypatc
     comparison finished) is reported with that stage and the comparison's flux
     budget, so the page still says where the light went."""
     budget = Table(("item", "flux_w", "fraction"), (("traced", 1.0, 1.0),))
-    comparison = SceneComparison(name="broken", description="", source="", effects=(),
-                                 settings={}, metrics=(), images={}, exposure={},
-                                 flux_budget=budget)
+    comparison = replace(make_comparison(name="broken", checks=False, camera=(24, 32),
+                                         receiver=(16, 16)),
+                         budgets=FluxBudgets(summary=budget))
 
     def fail(*args, **kwargs):
         raise OSError(28, "No space left on device")
@@ -58,7 +59,7 @@ def test_other_scenes_complete_and_the_index_lists_both(tmp_path):
     def broken():
         raise FloatingPointError("relMSE is NaN")
 
-    good = make_comparison(name="good", thresholds=False, camera=(24, 32), receiver=(16, 16))
+    good = make_comparison(name="good", checks=False, camera=(24, 32), receiver=(16, 16))
     failed, bad_row = run_scene(tmp_path, "broken-paper", SCENE, "paper", broken)
     assert isinstance(failed, SceneFailure)
     done, good_row = run_scene(tmp_path, "good-paper", SCENE, "paper", lambda: good)

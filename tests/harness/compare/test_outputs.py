@@ -12,7 +12,14 @@ import pytest
 
 from harness.compare.outputs import write_comparison, write_json
 from renderers.exr import read_exr
-from reports.records import MetricValue, SceneComparison, Table
+from reports.records import (
+    ConvergenceSection,
+    MethodProvenance,
+    MetricValue,
+    Provenance,
+    SceneComparison,
+    Table,
+)
 from scenes.files import NULL_REASONS, dumps_strict
 
 
@@ -20,11 +27,14 @@ def test_write_comparison_round_trip(tmp_path):
     image = np.random.default_rng(0).random((6, 8, 3)).astype(np.float32)
     comparison = SceneComparison(
         name="s", description="d", source="s.toml", effects=("shadows",), settings={"grid": 8},
+        method="m", method_description="a method",
         metrics=(MetricValue("camera", "full", "psnr", float("inf"), float("nan")),),
         images={"camera/method": image, "camera/ssim": image[..., 0]},
         exposure={"white": 1.0},
-        convergence=Table(("estimator", "iteration"), (("modified", 0), ("modified", 1))),
         files={"camera/method": "camera_method.exr", "camera/ssim": "camera_ssim.exr"},
+        provenance=Provenance("s.toml", MethodProvenance("m", "r", "perf_counter", 1.0)),
+        sections=(ConvergenceSection(
+            Table(("estimator", "iteration"), (("modified", 0), ("modified", 1)))),),
     )
     write_comparison(tmp_path, comparison)
     data = json.loads((tmp_path / "metrics.json").read_text())  # strict JSON parses

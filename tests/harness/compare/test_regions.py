@@ -6,8 +6,8 @@ import dataclasses
 
 import numpy as np
 
-from harness.compare.pipeline import _camera_is_blind
 from harness.compare.regions import caustic_region, object_mask, object_region
+from harness.compare.scoring import References, camera_is_blind, views_of
 from scenes import load_scene
 from scenes.geometry import build_geometry
 from tests.conftest import SCENES
@@ -64,8 +64,8 @@ def test_blind_reference_camera_is_detected():
     stray = np.zeros((32, 32, 3))
     stray[0, :5] = 5.0                     # 25 of 1024 energy units: 2.4 %
     sparse = rng.poisson(0.4, (32, 32, 1)).repeat(3, axis=2) / 0.4   # 67 % black
-    assert _camera_is_blind(stray, method)
-    assert not _camera_is_blind(sparse, method)
+    assert camera_is_blind(stray, method)
+    assert not camera_is_blind(sparse, method)
 
 
 def test_water_pool_camera_is_scored_against_the_camera_tracer():
@@ -73,7 +73,6 @@ def test_water_pool_camera_is_scored_against_the_camera_tracer():
     only through the water, which a ptracer reference renders black, so with ptracer
     the camera is left out with a note; the camera tracer's reference is compared,
     with the object region (the water surface seen through) scored."""
-    from harness.compare.pipeline import _views  # noqa: PLC0415 - private, this test only
     from renderers.results import ReceiverMap, RenderResult  # noqa: PLC0415
 
     scene = load_scene(SCENES / "water_pool.toml")
@@ -88,10 +87,11 @@ def test_water_pool_camera_is_scored_against_the_camera_tracer():
         return RenderResult("x", camera, maps, (), metadata={"camera_integrator": integrator})
 
     method = result(lit, None)
-    views, note = _views(scene, geometry, method, result(np.zeros_like(lit), "ptracer"),
-                         result(np.zeros_like(lit), "ptracer"))
-    assert note and "camera" not in [v.name for v in views]
-    views, note = _views(scene, geometry, method, result(lit, "camera_trace"),
-                         result(lit, "camera_trace"))
+    views, notes = views_of(scene, geometry, method,
+                            References(result(np.zeros_like(lit), "ptracer"),
+                                       result(np.zeros_like(lit), "ptracer")))
+    assert notes and "camera" not in [v.name for v in views]
+    views, notes = views_of(scene, geometry, method,
+                            References(result(lit, "camera_trace"), result(lit, "camera_trace")))
     (camera,) = [v for v in views if v.name == "camera"]
-    assert note is None and camera.regions["object"].sum() > 100
+    assert notes == () and camera.regions["object"].sum() > 100

@@ -30,16 +30,18 @@ import csv
 import dataclasses
 import json
 import tempfile
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.compare import pipeline
 from harness.compare.evaluate import score_value
 from harness.compare.outputs import write_comparison
-from harness.compare.pipeline import KNOWN_STUDIES, STUDIES, CompareOptions
+from harness.compare.pipeline import CompareOptions, default_studies, known_studies
 from harness.compare.regions import caustic_region
+from harness.compare.scoring import References
+from harness.compare.studies import DecompositionStudy, StudyContext
 from harness.raycast import SurfaceTracer
 from harness.studies.decomposition import (
     FIG10_CLAIM,
@@ -61,11 +63,12 @@ from renderers.mitsuba.reference import render_reference
 from renderers.results import ReceiverMap
 from reports.build import build_report
 from reports.decomposition_records import DECOMPOSITION_COLUMNS
-from reports.records import SceneComparison, Table
+from reports.records import RecordSection, Table
 from scenes import load_scene, with_settings
 from scenes.geometry import build_geometry
 from tests.conftest import SCENES
 from tests.harness.commands.test_compare import SMALL, _small_scene
+from tests.reports.conftest import make_comparison
 
 #: The issue's columns of decomposition.csv, in its order.
 ISSUE_COLUMNS = ("step", "description", "relmse", "ssim", "flip", "flux_ratio", "peak_ratio",
@@ -96,9 +99,11 @@ def glass():
         with RealtimeRunner(configured, repeats=1) as runner:
             # Through the compare pipeline's own call (quick: one repeat, no step 0;
             # no metrics given, so the noise floor is the expected one).
-            out["paper"] = pipeline._decomposition(
-                runner, reference, (), CompareOptions(studies=("decomposition",), quick=True,
-                                                      progress=False))
+            context = StudyContext(
+                configured, PAPER, runner.geometry, None, References(reference, reference),
+                SimpleNamespace(metrics=()), runner,
+                CompareOptions(studies=("decomposition",), quick=True, progress=False), {})
+            out["paper"] = DecompositionStudy().run(context).record
             out["paper/frame"] = render_frame(configured, ctx=runner.ctx,
                                               geometry=runner.geometry)
             strong = STRONG.configure(scene)
@@ -241,17 +246,12 @@ def test_verdict_and_summary_rules_on_hand_made_numbers():
     assert "estimated hits (0.0199 after 0.02, by less than 1 %" in text
 
 
-def test_compare_without_the_study_does_not_run_it(monkeypatch):
-    """``decomposition`` is a known study but not a default one, and the pipeline
-    does not call it unless named (cost: a compare without it pays nothing)."""
-    assert "decomposition" in KNOWN_STUDIES and "decomposition" not in STUDIES
-    assert "decomposition" not in CompareOptions().studies
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("the decomposition ran without being asked for")
-
-    monkeypatch.setattr(pipeline, "decomposition_study", refuse)
-    assert pipeline._decomposition(None, None, (), CompareOptions()) is None
+def test_compare_without_the_study_does_not_run_it():
+    """``decomposition`` is a known study but not a default one (cost: a compare
+    without it pays nothing)."""
+    assert "decomposition" in known_studies() and "decomposition" not in default_studies()
+    assert "decomposition" not in CompareOptions().selected
+    assert "decomposition" in CompareOptions(studies=("metrics", "decomposition")).selected
 
 
 def test_outputs_carry_the_decomposition(glass, tmp_path):
@@ -259,10 +259,9 @@ def test_outputs_carry_the_decomposition(glass, tmp_path):
     first, the four steps in order), the record with its summary in metrics.json, and
     a report page with the section, its waterfall and the summary."""
     record = glass["paper"]
-    comparison = SceneComparison(
-        name="glass_sphere", description="", source="glass_sphere.toml", effects=(),
-        settings={}, metrics=(), images={}, exposure={}, method="paper",
-        decomposition=record)
+    comparison = make_comparison(checks=False, camera=(24, 32), receiver=(16, 16)).with_section(
+        RecordSection("decomposition", "Where the error comes from", record,
+                      "decomposition.csv"))
     write_comparison(tmp_path, comparison)
     with (tmp_path / "decomposition.csv").open() as f:
         reader = csv.DictReader(f)
@@ -270,7 +269,7 @@ def test_outputs_carry_the_decomposition(glass, tmp_path):
     assert tuple(reader.fieldnames[:8]) == ISSUE_COLUMNS
     assert tuple(r["step"] for r in rows) == STEP_NAMES
     assert all(float(r["time_ms"]) > 0 and 0 < float(r["relmse"]) < 1 for r in rows)
-    data = json.loads((tmp_path / "metrics.json").read_text())["decomposition"]
+    data = json.loads((tmp_path / "metrics.json").read_text())["studies"]["decomposition"]
     assert data["summary"] == record.summary and data["noise_floor_kind"] == "expected"
     assert [s["step"] for s in data["steps"]] == list(STEP_NAMES)
     build_report(tmp_path / "report", [comparison])
@@ -295,7 +294,7 @@ def test_compare_writes_the_decomposition(tmp_path):
             rows = list(reader)
         assert tuple(reader.fieldnames[:8]) == ISSUE_COLUMNS
         assert tuple(r["step"] for r in rows) == STEP_NAMES
-        record = json.loads((folder / "metrics.json").read_text())["decomposition"]
+        record = json.loads((folder / "metrics.json").read_text())["studies"]["decomposition"]
         assert record["noise_floor_kind"] == "measured" and record["run_time_s"] > 0
         assert not (folder / "convergence.csv").exists()       # not asked for
         page = (folder / "index.html").read_text()

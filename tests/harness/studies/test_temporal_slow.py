@@ -28,7 +28,8 @@ def run(tmp_path_factory):
 
 
 def _temporal(out, preset: str) -> dict:
-    return json.loads((out / f"water_pool-{preset}" / "metrics.json").read_text())["temporal"]
+    data = json.loads((out / f"water_pool-{preset}" / "metrics.json").read_text())
+    return data["studies"]["temporal"]
 
 
 @pytest.mark.parametrize("preset", ["paper", "strong"])

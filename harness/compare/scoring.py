@@ -1,0 +1,216 @@
+"""The one scoring function: a method's render against the reference, as ``compare``,
+sweep rows and third-party methods are all scored.
+
+:func:`score_render` takes a timed render and the two references (the reference, and
+an independent one on disjoint seeds for the noise floor) and returns a
+:class:`Scored`: every metric per view and region (``harness.compare.evaluate``),
+the images and exposure the report shows, the names of the EXR files, the
+numerical-stability summary (``harness.checks.stability``) and both sides' flux
+budgets (``harness.compare.budget``).
+
+Views: the camera (regions ``full``, ``object`` — the caustic object seen through,
+its silhouette shrunk by a pixel — and ``object_masked``, the rest of the frame) and
+each receiver's irradiance map (regions ``full`` and ``caustic``: the reference above
+its caustic threshold). A ``ptracer`` reference camera cannot see through specular
+surfaces: its ``object`` region is not scored, and a camera it renders black where
+the method is lit is left out with a note.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from harness.checks.stability import stability_summary
+from harness.compare.budget import flux_budget, side_budgets
+from harness.compare.evaluate import exposure_for, score_view
+from harness.compare.regions import caustic_region, object_mask, object_region
+from harness.compare.timed import TimedRender
+from renderers.results import RenderResult
+from reports.display import luminance
+from reports.records import FluxBudgets, MetricValue
+from scenes import Scene
+from scenes.errors import HarnessError
+from scenes.geometry import SceneGeometry
+
+__all__ = ["NoCausticError", "References", "Scored", "camera_is_blind", "require_caustic",
+           "score_render", "views_of"]
+
+
+class NoCausticError(HarnessError):
+    """The reference puts no caustic light on any receiver: nothing to compare.
+
+    Attributes
+    ----------
+    comparison : SceneComparison or None
+        The finished comparison, every caustic metric NaN: its data files and flux
+        budget still show where the light went.
+    """
+
+    def __init__(self, message: str, *, comparison=None):
+        super().__init__(message)
+        self.comparison = comparison
+
+
+class References(NamedTuple):
+    """The reference a render is scored against, and an independent one on disjoint
+    seeds (the noise floor)."""
+
+    reference: RenderResult
+    independent: RenderResult
+
+
+class View(NamedTuple):
+    """One scored image: the camera or a receiver map, with its regions."""
+
+    name: str
+    method: np.ndarray
+    reference: np.ndarray
+    independent: np.ndarray
+    regions: dict[str, np.ndarray]
+    masks: dict[str, np.ndarray]
+    exposure_mask: np.ndarray | None
+
+
+@dataclass(frozen=True, eq=False)
+class Scored:
+    """What :func:`score_render` measured.
+
+    Attributes
+    ----------
+    metrics : tuple of MetricValue
+        Every metric per view and region, with its noise floor.
+    images : dict of str to ndarray
+        ``<view>/<kind>`` (``reports.records``): method, reference, signed, ssim, flip,
+        masks, and the reference's variance where it has one.
+    exposure : dict
+        Per view: ``white``, ``flip_start``, ``flip_stop``, ``diff_range``.
+    files : dict of str to str
+        EXR files to write: ``<view>/<kind>`` → file name.
+    stability : dict
+        The numerical-stability summary of the render.
+    budgets : FluxBudgets
+        Both sides' flux budgets.
+    notes : tuple of str
+        Views left out, and why.
+    """
+
+    metrics: tuple[MetricValue, ...]
+    images: dict[str, np.ndarray]
+    exposure: dict
+    files: dict[str, str]
+    stability: dict
+    budgets: FluxBudgets
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def require_caustic(reference: RenderResult, *, comparison=None) -> None:
+    """Raise :class:`NoCausticError` (carrying ``comparison``) when the reference's
+    receivers hold no caustic flux at all: every caustic metric is NaN, the scene
+    poses no question."""
+    if sum(float(np.sum(r.total_flux())) for r in reference.receivers) == 0.0:
+        raise NoCausticError("no caustic: the reference puts no caustic light on any "
+                             "receiver (check where the light, objects and receivers are)",
+                             comparison=comparison)
+
+
+def camera_is_blind(reference: np.ndarray, method: np.ndarray) -> bool:
+    """Whether a ``ptracer`` reference camera image is black where the real-time one
+    is lit: ptracer cannot connect receivers seen only through a specular surface
+    (everything under a water surface). Blind when, over the pixels the real-time
+    image lights (above 1 % of its 99th-percentile luminance), the reference holds
+    under 10 % of the real-time image's energy. ptracer is unbiased, so this holds at
+    any sample count (at 2 spp most pixels are still black), while a few stray
+    particles (seabed: about 1 % of the energy) do not make a usable reference. The
+    default camera tracer sees through specular surfaces and is never blind."""
+    rt = luminance(method)
+    top = float(np.percentile(rt, 99))
+    if top <= 0:
+        return False
+    lit = rt > 0.01 * top
+    return float(luminance(reference)[lit].sum()) < 0.1 * float(rt[lit].sum())
+
+
+def views_of(scene: Scene, geometry: SceneGeometry, method: RenderResult,
+             references: References) -> tuple[list[View], tuple[str, ...]]:
+    """The views to score (module docstring), and notes on any left out."""
+    reference, independent = references
+    views, notes = [], ()
+    ptracer = reference.metadata.get("camera_integrator") == "ptracer"
+    if ptracer and camera_is_blind(reference.camera, method.camera):
+        notes = ("camera not compared: the reference camera image is black "
+                 "(ptracer cannot see receivers through a specular surface)",)
+    else:
+        obj = object_mask(scene.camera, geometry)
+        regions = {"full": np.ones(obj.shape, bool), "object_masked": ~obj}
+        if not ptracer:
+            regions["object"] = object_region(scene.camera, geometry)
+        views.append(View("camera", method.camera, reference.camera, independent.camera,
+                          regions, {"mask_object": obj}, ~obj if ptracer else None))
+    for i, (method_map, ref_map, ind_map) in enumerate(zip(
+            method.receivers, reference.receivers, independent.receivers, strict=True)):
+        caustic = caustic_region(ref_map.irradiance)
+        views.append(View(f"receiver{i}", method_map.irradiance, ref_map.irradiance,
+                          ind_map.irradiance,
+                          {"full": np.ones(caustic.shape, bool), "caustic": caustic},
+                          {"mask_caustic": caustic}, None))
+    return views, notes
+
+
+def _score_views(views: list[View]):
+    """Metrics, images, per-view exposure and EXR file names of every view."""
+    metrics, images, files = [], {}, {}
+    exposure = {"white": {}, "flip_start": {}, "flip_stop": {}, "diff_range": {}}
+    for view in views:
+        expo = exposure_for(view.reference, mask=view.exposure_mask)
+        values, maps = score_view(view.name, view.method, view.reference, view.independent,
+                                  regions=view.regions, exposure=expo)
+        metrics += values
+        images.update(maps)
+        images[f"{view.name}/method"] = np.asarray(view.method, np.float32)
+        images[f"{view.name}/reference"] = np.asarray(view.reference, np.float32)
+        for name, mask in view.masks.items():
+            images[f"{view.name}/{name}"] = mask
+        exposure["white"][view.name] = expo.white
+        exposure["flip_start"][view.name] = expo.flip_start
+        exposure["flip_stop"][view.name] = expo.flip_stop
+        signed = np.abs(maps[f"{view.name}/signed"])
+        signed = signed[np.isfinite(signed)]
+        limit = float(np.percentile(signed, 99.5)) if signed.size else 0.0
+        # A colour bar needs a positive range: no difference (or none finite) gets 1.
+        exposure["diff_range"][view.name] = limit if limit > 0 else 1.0
+        for kind in ("method", "reference", "signed", "ssim", "flip"):
+            files[f"{view.name}/{kind}"] = f"{view.name}_{kind}.exr"
+    return tuple(metrics), images, exposure, files
+
+
+def _reference_variance(reference: RenderResult, views: list[View]) -> dict[str, np.ndarray]:
+    """``<view>/reference_variance``: the variance of the reference's mean per texel
+    (receivers) or pixel (the camera, when it is compared), which the physical
+    requirements (``harness.checks``) and the report's probes need; not written."""
+    out = {f"receiver{i}/reference_variance": np.asarray(m.variance, np.float32)
+           for i, m in enumerate(reference.receivers) if m.variance is not None}
+    camera = reference.metadata.get("camera_variance")
+    if camera is not None and any(v.name == "camera" for v in views):
+        out["camera/reference_variance"] = np.asarray(camera, np.float32)
+    return out
+
+
+def score_render(scene: Scene, geometry: SceneGeometry, render: TimedRender,
+                 references: References) -> Scored:
+    """Score ``render`` of ``scene`` against ``references`` (module docstring)."""
+    result = render.result
+    views, notes = views_of(scene, geometry, result, references)
+    metrics, images, exposure, files = _score_views(views)
+    images.update(_reference_variance(references.reference, views))
+    stability = stability_summary(scene, geometry, result, hits=render.hits)
+    sides = side_budgets(scene, result, stability, references.reference, hits=render.hits,
+                         geometry=geometry)
+    budgets = FluxBudgets(
+        summary=flux_budget(result.metadata, stability, result.receivers,
+                            references.reference.receivers),
+        method=sides["method_budget"], reference=sides["reference_budget"],
+        trace=sides["budget_trace"])
+    return Scored(metrics, images, exposure, files, stability, budgets, notes)
