@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from renderers.luxcore import check_supported, luxcore_version, render_receiver_caustic
-from renderers.mitsuba._mi import versions
+from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.reference import estimate_receivers
 from renderers.results import ReceiverMap, texel_centers
 from reports.records import Table
@@ -207,7 +207,7 @@ def run_crosscheck(scene, *, photons: int, seeds: int, other_photons: int) -> Cr
     ratios = compare_maps(estimate.caustic[0], other[0])
     provenance = {
         "transport": "full: all L S+ D paths, exact Fresnel on every dielectric",
-        "reference": {"renderer": "mitsuba photon tracer", **versions(),
+        "reference": {"renderer": "mitsuba photon tracer", **mitsuba_versions(),
                       "photons_per_seed": estimate.photons, "seeds": seeds,
                       "cut_flux_fraction": estimate.cut_fraction,
                       "seconds": reference_seconds},

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from renderers.mitsuba._mi import load
+from renderers.mitsuba import load_mitsuba
 from renderers.mitsuba.exporter import export_scene
 from scenes.camera import camera_rays
 from scenes.geometry import SceneGeometry, TriangleMesh, build_geometry
@@ -26,7 +26,7 @@ __all__ = ["RayHits", "ReceiverTracer", "SurfaceHits", "SurfaceTracer", "camera_
 
 def _mitsuba():
     """Mitsuba with its variant set (the renderer's one loader, ``llvm_ad_rgb``)."""
-    return load()[0]
+    return load_mitsuba()[0]
 
 
 def _mesh_scene(mi, mesh: TriangleMesh, name: str):
@@ -145,7 +145,7 @@ class SurfaceTracer:
 
     def __init__(self, scene: Scene, geometry: SceneGeometry | None = None, *,
                  objects: bool = True):
-        mi, dr, _ = load()
+        mi, dr, _ = load_mitsuba()
         self._mi, self._dr = mi, dr
         exported = export_scene(scene, geometry=geometry or build_geometry(scene),
                                 include_objects=objects)

@@ -29,7 +29,7 @@ import numpy as np
 from reports import plots
 
 # The report's own template environment and static files (one look for every page).
-from reports.build import _environment, _static, scene_folder
+from reports.build import page_environment, scene_folder, static_text
 from reports.records import METRIC_FORMULAS
 from scenes.files import atomic_write_bytes
 
@@ -155,7 +155,7 @@ def write_sweep_index(out_dir: str | Path, index: SweepIndex) -> Path:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     for name in ("report.css", "report.js"):
-        atomic_write_bytes(out_dir / "_static" / name, _static(name).encode("utf-8"))
+        atomic_write_bytes(out_dir / "_static" / name, static_text(name).encode("utf-8"))
     sections, taken = [], []
     for scene, description in index.scenes:
         rows = [r for r in index.rows if r.scene == scene]
@@ -170,7 +170,7 @@ def write_sweep_index(out_dir: str | Path, index: SweepIndex) -> Path:
                       "thumbnail": _thumbnail(out_dir, r.folder)} for r in rows],
             "failed": sum(1 for r in rows if r.error),
         })
-    html = _environment().get_template("sweep.html.j2").render({
+    html = page_environment().get_template("sweep.html.j2").render({
         "index": index, "sections": sections, "formulas": METRIC_FORMULAS,
         "failed": sum(1 for r in index.rows if r.error),
         "cached": sum(1 for r in index.rows if r.cached),

@@ -44,7 +44,7 @@ import numpy as np
 import OpenEXR
 
 from renderers.exr import ExrError, read_exr
-from renderers.mitsuba._mi import versions
+from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.reference import estimate_receivers
 from renderers.results import ReceiverMap
 from scenes import Scene, load_scene, with_settings
@@ -190,7 +190,7 @@ def _render(scene: Scene, out: Path, rel_dir: str) -> dict:
             "relative_noise": estimate.relative_noise, "seconds": seconds,
             "receiver_extent": [list(m.extent) for m in estimate.caustic],
             "resolution": list(s.receiver_map), "scale": scales, "sha256": hashes,
-            "caustic_only": True, "versions": versions()}
+            "caustic_only": True, "versions": mitsuba_versions()}
 
 
 def regenerate(golden_dir: Path, scenes_dir: Path, *, names=GOLDEN_SCENES,

@@ -42,7 +42,7 @@ from harness.checks.golden import GOLDEN_SETTINGS, golden_scene, load_golden, re
 from harness.compare.evaluate import exposure_for, score_value
 from harness.compare.regions import caustic_region
 from renderers.caustics_mapping import render
-from renderers.mitsuba._mi import versions
+from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.reference import estimate_receivers
 from reports.records import MetricValue
 from scenes import Scene, with_settings
@@ -144,7 +144,7 @@ def calibrate(scenes_dir: Path, golden_dir: Path, names, *, extra: int = 3,
     """Locks for ``names`` and ``methods`` (module docstring)."""
     bounds = []
     today = time.strftime("%Y-%m-%d")
-    v = versions()
+    v = mitsuba_versions()
     k = GOLDEN_SETTINGS["seeds"]
     for name in names:
         scene = golden_scene(scenes_dir, name)

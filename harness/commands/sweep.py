@@ -30,7 +30,7 @@ from harness.sweep.run import RowResult, SweepRun, run_sweep
 from harness.sweep.spec import load_sweep
 from harness.terminal import markup, plain, warn
 from harness.writable import usable_cache
-from renderers.mitsuba import _mi
+from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.cache import cache_dir
 from reports.sweep import SweepIndex, SweepRow, write_sweep_index
 
@@ -121,7 +121,7 @@ def sweep(args: argparse.Namespace) -> int:
     spec = load_sweep(args.sweep)
     for problem in spec.warnings:
         warn(problem)
-    plan = plan_sweep(spec, versions=_mi.versions())
+    plan = plan_sweep(spec, versions=mitsuba_versions())
     if args.dry_run:
         return _dry_run(plan)
     use_cache = not args.no_cache and usable_cache(cache_dir(args.cache_dir))

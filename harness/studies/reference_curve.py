@@ -19,7 +19,7 @@ import numpy as np
 
 from harness.compare.evaluate import score_value
 from harness.studies.timing import OneOffCosts, median_seconds
-from renderers.mitsuba import _mi
+from renderers.mitsuba import load_mitsuba
 from renderers.mitsuba.photons import PhotonTracer
 from scenes import Scene
 
@@ -77,7 +77,7 @@ def reference_curve(scene: Scene, reference: np.ndarray, caustic: np.ndarray, *,
     progress : callable, optional
         Called once per budget.
     """
-    _, dr, _ = _mi.load()
+    _, dr, _ = load_mitsuba()
     # As in a fresh process: no kernel resident in memory (rendering the reference
     # in this process left them there); Dr.Jit's on-disk cache stays, as Mesa's
     # shader cache does for the method's fresh GL context.

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from harness.sweep.worker import THREADS_ENV
-from renderers.mitsuba import _mi
+from renderers.mitsuba import mitsuba_versions
 from scenes.errors import HarnessError
 
 __all__ = ["GPU", "ClusterError", "ClusterInfo", "local_gpus", "open_cluster",
@@ -199,7 +199,7 @@ def worker_versions(client, info: ClusterInfo) -> dict:
     ClusterError
         The workers do not all agree: their seeds could not merge into one reference.
     """
-    futures = {address: client.submit(_mi.versions, workers=[address], pure=False,
+    futures = {address: client.submit(mitsuba_versions, workers=[address], pure=False,
                                       key=f"versions-{address}")
                for address in info.workers}
     found = {address: future.result() for address, future in futures.items()}

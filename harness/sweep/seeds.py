@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.sweep.worker import worker_name
-from renderers.mitsuba import _mi
+from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.camera_trace import render_traced_camera
 from renderers.mitsuba.noise import caustic_region, relative_noise, seed_statistics
 from renderers.mitsuba.photons import (
@@ -129,7 +129,7 @@ def trace_seed(scene: Scene, index: int, *, batch: int = DEFAULT_BATCH) -> SeedB
                      emitted=tuple(emitted), cut=tuple(cut), seconds=tuple(seconds),
                      extents=tuple(tuple(e) for e in tracer.extents),
                      channel_passes=len(tracer.channels), worker=worker_name(),
-                     versions=_mi.versions())
+                     versions=mitsuba_versions())
 
 
 def _check(batches: list[SeedBatch], scene: Scene, versions: dict) -> None:

@@ -70,7 +70,7 @@ def dask_setup(worker) -> None:
     if threads:
         # renderers.mitsuba (trimesh, scipy) and Dr.Jit load only in a worker told its
         # thread count; the preload module stays light.
-        from renderers.mitsuba import _mi  # noqa: PLC0415 - Dr.Jit, see above
+        from renderers.mitsuba import load_mitsuba  # noqa: PLC0415 - Dr.Jit, see above
 
-        _, dr, _ = _mi.load()
+        _, dr, _ = load_mitsuba()
         dr.set_thread_count(int(threads))

@@ -154,7 +154,7 @@ def _sample_points(geometry: SceneGeometry) -> np.ndarray:
     return np.concatenate(parts)
 
 
-def _faces(light: LightSetup, points: np.ndarray) -> tuple[int, ...]:
+def light_faces(light: LightSetup, points: np.ndarray) -> tuple[int, ...]:
     """Map views that see any of ``points``: all of a single view, the cube faces hit."""
     if not light.cube:
         return (0,)
@@ -184,7 +184,7 @@ def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: i
                                                state.setup, state.acc, state.timer)
     s = scene.settings
     resources = pool(ctx)
-    faces = _faces(sample, setup.points)
+    faces = light_faces(sample, setup.points)
     light = dataclasses.replace(sample, map_faces=faces)
     acc.map_faces.update(faces)
     with timer.measure("receiver_positions"):
@@ -197,7 +197,7 @@ def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: i
             np.stack([v.view_proj for v in light.map_views]), s.positions_map,
             light.cube, light.position.copy(), np.array(light.slots)))
     front, back, traces = _trace_objects(state, light, positions=positions)
-    caustic = _splat_maps(state, light, faces=faces, traces=traces, positions=positions)
+    caustic = splat_maps(state, light, faces=faces, traces=traces, positions=positions)
     shadow = None
     if "shadows" in state.effects:
         with timer.measure("shadow_map"):
@@ -283,7 +283,7 @@ def _trace_objects(state: FrameState, light: LightSetup, *, positions):
     return front, back, traces
 
 
-def _splat_maps(state: FrameState, light: LightSetup, *, faces: tuple[int, ...],
+def splat_maps(state: FrameState, light: LightSetup, *, faces: tuple[int, ...],
                 traces: list[Trace], positions) -> moderngl.Texture:
     """Splat the traces into the caustic map (optionally low-passed) and into each
     receiver's (u, v) map; returns the caustic-map texture (the camera reads it)."""

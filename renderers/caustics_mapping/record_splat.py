@@ -6,7 +6,7 @@ read only that buffer. This module lets a caller hand in such records from any
 source (exact light paths from a ray tracer, the method's own records with some
 fields replaced) and runs the very passes a frame runs on them: per light sample the
 receiver positions (the (u, v) of hits on receivers whose (u, v) is not affine),
-then ``light_sample._splat_maps``: the caustic map with the kernel the settings
+then ``light_sample.splat_maps``: the caustic map with the kernel the settings
 name and, from the same records, each receiver's (u, v) irradiance map. Nothing is
 splatted differently, so two record sets differ in their maps only by what their
 records say.
@@ -44,9 +44,9 @@ from renderers.caustics_mapping.context import GLError, PassTimer, create_contex
 from renderers.caustics_mapping.light_sample import (
     Accumulator,
     FrameState,
-    _faces,
-    _splat_maps,
+    light_faces,
     scene_setup,
+    splat_maps,
 )
 from renderers.caustics_mapping.lights import LightSetup, light_setups
 from renderers.caustics_mapping.presets import resolve_settings
@@ -200,13 +200,13 @@ def _splat(scene: Scene, records, ctx: moderngl.Context,
     state = FrameState(scene, ctx, geometry, effects, timer, setup, acc)
     resources = pool(ctx)
     for sample, arrays in zip(lights, records, strict=True):
-        faces = _faces(sample, setup.points)
+        faces = light_faces(sample, setup.points)
         light = dataclasses.replace(sample, map_faces=faces)
         with timer.measure("receiver_positions"):
             positions = render_receiver_positions(ctx, light, setup.receivers,
                                                   size=s.positions_map, faces=faces)
         traces = [_upload(ctx, array) for array in arrays]
-        caustic = _splat_maps(state, light, faces=faces, traces=traces, positions=positions)
+        caustic = splat_maps(state, light, faces=faces, traces=traces, positions=positions)
         for trace in traces:
             trace.give_back(resources)
         positions.give_back(resources)

@@ -15,14 +15,20 @@ Public entry points
     reference camera).
 ``render_camera(scene, *, spp, seed, ...)``
     -> one seed of the ptracer camera image (``--camera ptracer``).
+``load_mitsuba()``
+    -> ``(mitsuba, drjit, variant)``, imported and configured once per process.
+``mitsuba_versions()``
+    -> the Mitsuba and Dr.Jit versions and the variant (cache keys, provenance).
 """
 
 from __future__ import annotations
 
+from renderers.mitsuba._mi import load as load_mitsuba
+from renderers.mitsuba._mi import versions as mitsuba_versions
 from renderers.mitsuba.camera import render_camera
 from renderers.mitsuba.camera_trace import render_traced_camera
 from renderers.mitsuba.photons import event_chains_counted, trace_receiver_maps
 from renderers.mitsuba.reference import render_reference
 
-__all__ = ["event_chains_counted", "render_camera", "render_reference", "render_traced_camera",
-           "trace_receiver_maps"]
+__all__ = ["event_chains_counted", "load_mitsuba", "mitsuba_versions", "render_camera",
+           "render_reference", "render_traced_camera", "trace_receiver_maps"]

@@ -55,7 +55,7 @@ from renderers.mitsuba.camera_lookup import (
 from renderers.mitsuba.camera_shading import camera_event, receiver_radiance
 from renderers.mitsuba.exporter import channel_mask, export_scene
 from renderers.mitsuba.noise import seed_statistics
-from renderers.mitsuba.photons import MAX_SPECULAR_EVENTS, PhotonTracer, _chain_code, _lane_rng
+from renderers.mitsuba.photons import MAX_SPECULAR_EVENTS, PhotonTracer, chain_code, lane_rng
 from scenes import effects_of, event_chain
 from scenes.geometry import SceneGeometry, build_geometry
 from scenes.model import DiffuseMaterial, Scene
@@ -161,7 +161,7 @@ class CameraTracer:
             scene, geometry=self.geometry, include_objects=False).scene
         self.all_paths = scene.settings.all_specular_paths
         chains = [event_chain(o) for o in scene.objects]
-        self.chain_codes = [_chain_code(c) if c else -1 for c in chains]
+        self.chain_codes = [chain_code(c) if c else -1 for c in chains]
         lengths = [len(c.split()) - 2 for c in chains if c]
         self.max_events = MAX_SPECULAR_EVENTS if self.all_paths else max(lengths or [0])
         self.diffuse_objects = [isinstance(o.material, DiffuseMaterial) for o in scene.objects]
@@ -275,7 +275,7 @@ class CameraTracer:
                 n = min(rows, h - row0) * w * spp
                 key = ((seed * 1_000_003 + CAMERA_STREAM) * 7 + (0 if c is None else c + 1)) \
                     * 1_000_003 + batch
-                rng = _lane_rng(n, key)
+                rng = lane_rng(n, key)
                 lane = dr.arange(mi.UInt32, n)
                 pixel, j = lane // spp, lane % spp
                 x = pixel % w
@@ -313,7 +313,7 @@ class CameraTracer:
         ex = self.exported[c]
         lane = dr.arange(mi.UInt32, w * h)
         ray = self._rays(c, lane % w, lane // w, (0.5, 0.5))
-        end = self._trace(c, ray, _lane_rng(w * h, CAMERA_STREAM))
+        end = self._trace(c, ray, lane_rng(w * h, CAMERA_STREAM))
         u, v = end.si.uv.x, end.si.uv.y
         sid = dr.select(end.ended, dr.reinterpret_array(mi.UInt32, end.si.shape), 0)
         dr.eval(u, v, sid, end.chain)

@@ -125,7 +125,7 @@ BUDGET_ITEMS = ("missed", "tir", "cap", "left", "uncounted", "fresnel", "back_or
                 "absorbed_medium", "absorbed_surface", "shading", "deposited")
 
 
-def _chain_code(chain: str) -> int:
+def chain_code(chain: str) -> int:
     code = 0
     for event in chain.split()[1:-1]:
         code = code * 3 + (_T if event == "T" else _R)
@@ -195,7 +195,7 @@ class PhotonSums:
     screened: int = 0
 
 
-def _lane_rng(n: int, key: int):
+def lane_rng(n: int, key: int):
     """One PCG32 per lane, its state and stream both hashed (TEA) from (key, lane).
 
     Plain ``PCG32(n, key, lane)`` gives lane i the same stream (increment) under
@@ -298,7 +298,7 @@ class PhotonTracer:
         lo, hi = allp.min(axis=0), allp.max(axis=0)
         self.scene_center = tuple(((lo + hi) / 2).tolist())
         self.scene_radius = float(np.linalg.norm(hi - lo) / 2) + 1e-3
-        chains = [_chain_code(event_chain(o)) if event_chain(o) else -1 for o in scene.objects]
+        chains = [chain_code(event_chain(o)) if event_chain(o) else -1 for o in scene.objects]
         self.chain_codes = chains
         lengths = [len(event_chain(o).split()) - 2 for o in scene.objects if event_chain(o)]
         self.max_events = MAX_SPECULAR_EVENTS if self.all_paths else max(lengths or [0])
@@ -359,7 +359,7 @@ class PhotonTracer:
         """Trace one batch; returns the (emitted, cut) weight sums (RGB) and the ray
         casts (see PhotonSums). ``tally`` collects the flux budget (``budget``)."""
         mi, _, _ = _mi.load()
-        rng = _lane_rng(n, key)
+        rng = lane_rng(n, key)
         square = stratified_square(rng, n)
         ray, weight = sample_photons(self.scene.light, self.targets, rng,
                                      self.scene_center, self.scene_radius, square=square)

@@ -53,10 +53,10 @@ if what == "photons":
     s = warm(lambda: tracer.trace(n, seed=0))
     print(json.dumps({"rate": n / s, "unit": "photons/s", "seconds": s}))
 elif what == "ptracer":
-    from renderers.mitsuba import _mi
+    from renderers.mitsuba import load_mitsuba, mitsuba_versions
     from renderers.mitsuba.camera import camera_max_depth
     from renderers.mitsuba.exporter import export_scene, sensor_dict
-    mi, _, _ = _mi.load()
+    mi, _, _ = load_mitsuba()
     depth = camera_max_depth(scene)
     spp = 16
     exported = export_scene(scene, sensor=sensor_dict(scene.camera, spp=spp),

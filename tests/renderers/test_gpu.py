@@ -29,13 +29,13 @@ from scenes import load_scene, resolve_scene, with_settings
 side, out = sys.argv[1], sys.argv[2]
 scene = with_settings(load_scene(resolve_scene("glass_sphere")), {"receiver_map": [64, 64]})
 if side == "mitsuba":
-    from renderers.mitsuba import _mi
+    from renderers.mitsuba import load_mitsuba, mitsuba_versions
     from renderers.mitsuba.reference import estimate_receivers
     est = estimate_receivers(scene, photons=1 << 22, seeds=4, target_noise=1e-9,
                              caustic_only=True)
     np.save(out + ".npy", est.caustic[0].irradiance)
     np.save(out + ".var.npy", est.caustic[0].variance)
-    print(json.dumps({"device": _mi.load()[2]}))
+    print(json.dumps({"device": load_mitsuba()[2]}))
 else:
     from renderers.caustics_mapping.context import create_context
     from renderers.caustics_mapping.renderer import render

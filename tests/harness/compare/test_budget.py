@@ -14,7 +14,7 @@ from harness.compare.headlines import BUDGET_CLOSURE
 from harness.compare.probe import BUDGET_PHOTONS, probe_caustic, reference_budget
 from renderers.caustics_mapping import render_frame
 from renderers.methods import load_method
-from renderers.mitsuba import _mi
+from renderers.mitsuba import load_mitsuba
 from renderers.mitsuba.emission import bounding_sphere
 from renderers.mitsuba.photons import BUDGET_ITEMS, PhotonTracer
 from scenes import load_scene, with_settings
@@ -162,7 +162,7 @@ def test_budget_leaves_the_maps_unchanged():
     scatter_reduce's order, and with it float32 rounding, is fixed), the caustic
     maps traced with the budget are bit-identical to those traced without it, in
     chain and all-paths mode."""
-    _, dr, _ = _mi.load()
+    _, dr, _ = load_mitsuba()
     threads = dr.thread_count()
     dr.set_thread_count(1)
     try:

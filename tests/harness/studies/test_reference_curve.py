@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from harness.studies.reference_curve import reference_curve
-from renderers.mitsuba import _mi
+from renderers.mitsuba import load_mitsuba
 from renderers.mitsuba.noise import caustic_region
 from renderers.mitsuba.photons import PhotonTracer
 from scenes import load_scene, with_settings
@@ -29,7 +29,7 @@ def test_one_photon_kernel_serves_every_budget():
     cache miss, and every launch runs the same kernel hashes as the first. Before
     the fix the stratified sampler baked the launch size into the kernel as
     literals, and each budget compiled anew (0.6 to 1 s each on 2 CPU cores)."""
-    _, dr, _ = _mi.load()
+    _, dr, _ = load_mitsuba()
     tracer = PhotonTracer(_glass_sphere(), caustic_only=True)
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     try:

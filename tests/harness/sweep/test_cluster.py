@@ -36,7 +36,7 @@ from harness.sweep.plan import plan_sweep
 from harness.sweep.spec import load_sweep
 from renderers.exr import read_exr
 from renderers.methods import load_method
-from renderers.mitsuba import _mi
+from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.cache import read_result_dir
 from renderers.mitsuba.reference import render_reference
 
@@ -96,7 +96,7 @@ def test_real_cluster_equals_a_single_process_run(cluster_run):
     assert all(r["error"] == "" and r["cached"] == "false" for r in rows)
     assert {r["worker"] for r in rows} == set(cluster_run.addresses.values())
 
-    plan = plan_sweep(load_sweep(cluster_run.sweep), versions=_mi.versions())
+    plan = plan_sweep(load_sweep(cluster_run.sweep), versions=mitsuba_versions())
     single = {}
     for key, job in plan.references.items():
         merged = read_result_dir(cluster_run.cache / key)     # written by the sweep

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from harness.sweep.seeds import MergeError, merge_reference, trace_seed
-from renderers.mitsuba import _mi
+from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.reference import estimate_receivers
 from scenes import load_scene, with_settings
 
@@ -56,7 +56,7 @@ def test_seed_tasks_merge_to_the_single_process_estimate(scene, batches):
     target = 1e-9  # never reached: both trace the whole budget
     scene = with_settings(scene, {"target_noise": target})
     single = estimate_receivers(scene, batch=BATCH, caustic_only=True)
-    merged = merge_reference(scene, "key", _mi.versions(), *reversed(batches))
+    merged = merge_reference(scene, "key", mitsuba_versions(), *reversed(batches))
     assert [b.seed for b in batches] == [5, 6, 7]
     assert merged.metadata["photons"] == single.photons == PHOTONS
     assert merged.metadata["stopped_by"] == single.stopped_by == "budget"
@@ -71,7 +71,7 @@ def test_seed_tasks_merge_to_the_single_process_estimate(scene, batches):
     assert np.all(np.isfinite(mine.variance)) and np.all(mine.variance[lit] > 0)
     assert mine.extent == theirs.extent
     two = dataclasses.replace(scene, settings=dataclasses.replace(s, seeds=2))
-    fewer = merge_reference(two, "key", _mi.versions(), *batches[:2]).receivers[0]
+    fewer = merge_reference(two, "key", mitsuba_versions(), *batches[:2]).receivers[0]
     assert not np.all(np.abs(fewer.irradiance - theirs.irradiance)
                       <= RTOL * np.abs(theirs.irradiance))
 
@@ -88,7 +88,7 @@ def test_merge_stops_where_the_single_process_reference_stops(scene, batches):
     assert n1 > n2 > n3
     scene = with_settings(scene, {"target_noise": (n1 + n2) / 2})
     single = estimate_receivers(scene, batch=BATCH, caustic_only=True)
-    merged = merge_reference(scene, "key", _mi.versions(), *batches)
+    merged = merge_reference(scene, "key", mitsuba_versions(), *batches)
     assert single.photons == merged.metadata["photons"] == 2 * BATCH
     assert single.stopped_by == merged.metadata["stopped_by"] == "target_noise"
     assert merged.metadata["sweep"] == {**merged.metadata["sweep"], "rounds_used": 2,
@@ -103,7 +103,7 @@ def test_batches_that_are_not_one_reference_are_refused(scene, batches):
     """Regression lock: a missing seed, or a seed traced under other Mitsuba versions
     than the cache key names, is a MergeError naming the problem, never a silently
     wrong reference."""
-    versions = _mi.versions()
+    versions = mitsuba_versions()
     with pytest.raises(MergeError, match=r"seed batches \[0, 2\] are not the seeds 0..2"):
         merge_reference(scene, "key", versions, batches[0], batches[2])
     other = {**versions, "mitsuba": "0.0.1"}

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from renderers.mitsuba import _mi
+from renderers.mitsuba import load_mitsuba
 from renderers.mitsuba.camera import render_camera
 from renderers.mitsuba.noise import seed_statistics
 from renderers.mitsuba.reference import estimate_receivers
@@ -35,7 +35,7 @@ ALPHA = 0.01     # family-wise false-alarm rate
 
 
 def test_photon_map_matches_ptracer_on_glass_sphere(request):
-    mi, _, _ = _mi.load()
+    mi, _, _ = load_mitsuba()
     scene = load_scene(request.config.rootpath / "scenes" / "glass_sphere.toml")
     # Centre near the focus, offset so the window is not symmetric (a flip fails).
     cx, cy = -0.38, 0.31

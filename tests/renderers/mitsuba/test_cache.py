@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from renderers.exr import write_exr
-from renderers.mitsuba import _mi, cache
+from renderers.mitsuba import cache, mitsuba_versions
 from renderers.mitsuba.cache import (
     InvalidCacheEntryWarning,
     cache_key,
@@ -107,7 +107,7 @@ def _temporaries(root: Path) -> list[str]:
 def test_truncated_exr_is_detected_and_rerendered(tiny, tmp_path):
     root = tmp_path / "c"
     render_reference(tiny, cache=root, progress=False)
-    key = cache_key(tiny, _mi.versions())
+    key = cache_key(tiny, mitsuba_versions())
     exr = root / key / "receiver_irradiance.exr"
     exr.write_bytes(exr.read_bytes()[: exr.stat().st_size // 2])
     with pytest.warns(InvalidCacheEntryWarning):
@@ -125,7 +125,7 @@ def test_corrupt_sidecar_is_detected_and_rerendered(tiny, tmp_path):
     temporary, is left)."""
     root = tmp_path / "c"
     render_reference(tiny, cache=root, progress=False)
-    key = cache_key(tiny, _mi.versions())
+    key = cache_key(tiny, mitsuba_versions())
     (root / key / "result.json").write_text("{not json")
     (root / key / "receiver_irradiance_1.exr").write_bytes(b"left by an older entry")
     with pytest.warns(InvalidCacheEntryWarning) as caught:
@@ -171,7 +171,7 @@ def test_writer_killed_mid_write_leaves_a_miss_not_a_corrupt_hit(tiny, tmp_path)
     finally:
         child.send_signal(signal.SIGKILL)
         child.wait(timeout=30)
-    key = cache_key(tiny, _mi.versions())
+    key = cache_key(tiny, mitsuba_versions())
     assert not (root / key).exists()
     leftovers = [p for p in root.iterdir() if p.name.startswith(f".{key}.tmp-")]
     assert len(leftovers) == 1 and (leftovers[0] / "camera.exr").exists()
@@ -204,7 +204,7 @@ def test_two_processes_rendering_the_same_key(tiny, tmp_path):
     outputs = [c.communicate(timeout=300)[0].strip() for c in children]
     assert all(c.returncode == 0 for c in children)
     assert sorted(o.split()[0] for o in outputs) == ["hit", "miss"], outputs
-    assert load_entry(root, cache_key(tiny, _mi.versions()))[1] == "hit"
+    assert load_entry(root, cache_key(tiny, mitsuba_versions()))[1] == "hit"
 
 
 # ------------------------------------------------------------------ the key
@@ -221,13 +221,13 @@ def test_renaming_a_scene_hits_its_cached_reference(tiny, tmp_path):
     root = tmp_path / "c"
     render_reference(tiny, cache=root, progress=False)
     renamed = _renamed(tiny, "tiny_renamed", "the same scene under another name")
-    assert cache_key(renamed, _mi.versions()) == cache_key(tiny, _mi.versions())
+    assert cache_key(renamed, mitsuba_versions()) == cache_key(tiny, mitsuba_versions())
     assert render_reference(renamed, cache=root, progress=False).metadata["cache"] == "hit"
     brighter = parse_scene(TINY.replace("irradiance = [3.0, 3.0, 3.0]",
                                         "irradiance = [3.0, 3.0, 3.5]"))
     wider = parse_scene(TINY.replace("fov = 40.0", "fov = 41.0"))
     for other in (brighter, wider):
-        assert cache_key(other, _mi.versions()) != cache_key(tiny, _mi.versions())
+        assert cache_key(other, mitsuba_versions()) != cache_key(tiny, mitsuba_versions())
 
 
 # ------------------------------------------------------------ schema of an entry
@@ -240,7 +240,7 @@ def rendered(tmp_path_factory):
     (folder / "tiny.toml").write_text(TINY)
     scene = load_scene(folder / "tiny.toml")
     render_reference(scene, cache=folder / "c", progress=False)
-    return folder / "c", cache_key(scene, _mi.versions())
+    return folder / "c", cache_key(scene, mitsuba_versions())
 
 
 @pytest.fixture
@@ -365,7 +365,7 @@ def test_a_write_that_raises_midway_leaves_no_files(tiny, tmp_path, monkeypatch)
     monkeypatch.setattr(cache, "write_exr", failing)
     with pytest.raises(KeyboardInterrupt):
         render_reference(tiny, cache=root, progress=False)
-    key = cache_key(tiny, _mi.versions())
+    key = cache_key(tiny, mitsuba_versions())
     assert len(calls) == 2 and not (root / key).exists()
     assert sorted(p.name for p in root.iterdir()) == [f"{key}.lock"]
     monkeypatch.setattr(cache, "write_exr", real)

@@ -591,14 +591,14 @@ def test_cache_keeps_the_two_camera_integrators_apart(tmp_path):
     are two entries; an entry recording the other integrator under a key is a miss
     (re-rendered), never returned; the metadata says which integrator made the
     image and, for the tracer, its lookup maps."""
-    from renderers.mitsuba import _mi  # noqa: PLC0415
+    from renderers.mitsuba import mitsuba_versions  # noqa: PLC0415
     from renderers.mitsuba.cache import cache_key, load_entry, write_result_dir  # noqa: PLC0415
     from renderers.mitsuba.reference import render_reference  # noqa: PLC0415
     from scenes import parse_scene  # noqa: PLC0415
     from tests.renderers.mitsuba.test_cache import TINY  # noqa: PLC0415
 
     scene = parse_scene(TINY, file="<tiny>")
-    versions = _mi.versions()
+    versions = mitsuba_versions()
     assert cache_key(scene, versions) == cache_key(scene, versions, camera="trace")
     assert cache_key(scene, versions, camera="ptracer") != cache_key(scene, versions)
     root = tmp_path / "cache"

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from renderers.mitsuba import _mi
+from renderers.mitsuba import load_mitsuba
 from renderers.mitsuba.camera import camera_max_depth
 from renderers.mitsuba.exporter import export_scene
 from renderers.mitsuba.photons import event_chains_counted
@@ -16,7 +16,7 @@ from scenes.geometry import build_geometry
 
 @pytest.mark.parametrize("name", ["glass_sphere", "water_pool", "metal_ring"])
 def test_meshes_are_bit_identical(name, request):
-    mi, _, _ = _mi.load()
+    mi, _, _ = load_mitsuba()
     scene = load_scene(request.config.rootpath / "scenes" / f"{name}.toml")
     geometry = build_geometry(scene)
     exported = export_scene(scene, geometry=geometry)

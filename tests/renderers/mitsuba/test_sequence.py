@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from renderers.mitsuba import _mi
+from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.cache import InvalidCacheEntryWarning, cache_key
 from renderers.mitsuba.sequence import SUBFOLDER, frame_seeds, render_reference_frames
 from scenes import parse_scene
@@ -118,7 +118,7 @@ def test_frames_are_cached_under_their_seed(tmp_path):
 def test_the_cache_key_of_a_reference_ignores_the_animation():
     """``[animation]`` says how a scene moves, not what one frame is: adding it keeps
     every cached reference of the scene (the key of frame 0 is the still scene's)."""
-    versions = _mi.versions()
+    versions = mitsuba_versions()
     animated = parse_scene(MOVING)
     still = dataclasses.replace(animated, animation=None)
     assert cache_key(animated, versions) == cache_key(still, versions)

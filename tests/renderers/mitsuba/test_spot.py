@@ -32,7 +32,7 @@ import functools
 import numpy as np
 import pytest
 
-from renderers.mitsuba import _mi
+from renderers.mitsuba import load_mitsuba
 from renderers.mitsuba.emission import spot_falloff
 from renderers.mitsuba.exporter import emitter_dicts
 from renderers.mitsuba.reference import estimate_receivers
@@ -68,7 +68,7 @@ def test_falloff_is_mitsubas_spot_emitter(beam):
     exporter configures it for the camera's ptracer, and the analytic f(theta),
     from the axis through the beam edge and the ramp to past the cutoff; with and
     without ``beam_width`` (a hard edge)."""
-    mi, dr, _ = _mi.load()
+    mi, dr, _ = load_mitsuba()
     light = _spot(beam_width=beam)
     emitter = mi.load_dict(emitter_dicts(light)["light"])
     axis = np.asarray(light.direction) / np.linalg.norm(light.direction)
