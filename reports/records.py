@@ -83,11 +83,26 @@ class EqualErrorSpeedup:
         t_ref(e_method) in seconds.
     kind : {"interpolated", "extrapolated", "bound"}
         How t_ref(e_method) was obtained (see the module docstring).
+    low, high : float
+        95 % interval of the speedup (``harness.studies.pareto``); NaN where none
+        was computed, ``high`` infinite for a lower bound.
+    slope, slope_stderr : float
+        Fitted log-log slope of the reference's excess relMSE against its time, and
+        its standard error (NaN where no fit was made).
+    bound_kind : {"estimate", "lower bound", "upper bound"}
+        ``speedup`` is an estimate, or "at least" (the method's excess interval
+        contains 0: the bound at its upper end), or "at most" (the reference's
+        cheapest budget already reaches the method's error).
     """
 
     speedup: float
     reference_time: float
     kind: Literal["interpolated", "extrapolated", "bound"]
+    low: float = float("nan")
+    high: float = float("nan")
+    slope: float = float("nan")
+    slope_stderr: float = float("nan")
+    bound_kind: Literal["estimate", "lower bound", "upper bound"] = "estimate"
 
 
 @dataclass(frozen=True)
