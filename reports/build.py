@@ -8,7 +8,10 @@ Layout written under ``out_dir``::
     <folder>/index.html     one scene; <folder> = scene_folder(name)
     <folder>/*.png, *.svg   previews and plots (not with self_contained)
     <folder>/hdr.js         HDR previews as data: URIs (not with self_contained)
-    <folder>/data_<view>.js float32 data of each view, base64 (not with self_contained)
+    <folder>/data_<view>.js sizes and blobs of each view's float data (not with
+                            self_contained)
+    _data/<hash>.js         the float data's blobs, each written once, shared by
+                            the pages of a scene (not with self_contained)
     <folder>/profile_<view>.csv  default profile of each receiver map (not with
                             self_contained: a data: URI link there)
 
@@ -16,8 +19,8 @@ Templates are jinja2 with autoescaping on, so every text from a scene file (name
 description, settings, provenance) renders inert. HDR previews always reach the
 page as ``data:`` URIs, because Chromium taints a canvas drawn from a ``file://``
 image and the exposure control must read pixels back. The views' float data
-(:func:`reports.panels.view_data`) come as scripts for the same reason (no fetch on
-``file://``), one per view, loaded before the page script.
+(:mod:`reports.page_data`) come as scripts for the same reason (no fetch on
+``file://``), loaded before the page script.
 
 The page script ``report.js`` is one file made of the readable sources in
 ``reports/static`` (:data:`SCRIPT_PARTS`, in order), so every page, the sweep's
@@ -44,7 +47,8 @@ from markupsafe import Markup
 
 from reports import plots
 from reports.decomposition import decomposition_section
-from reports.panels import Assets, data_script, hdr_script, thumbnails, view_panels, views
+from reports.page_data import page_scripts
+from reports.panels import Assets, hdr_script, thumbnails, view_panels, views
 from reports.records import (
     CHECK_KIND_MEANING,
     CHECK_KINDS,
@@ -122,7 +126,7 @@ def _number(value: Any) -> str:
 
 
 @cache
-def _environment() -> jinja2.Environment:
+def page_environment() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("reports", "templates"),
         autoescape=jinja2.select_autoescape(
@@ -139,7 +143,7 @@ def _environment() -> jinja2.Environment:
 
 
 @cache
-def _static(name: str) -> str:
+def static_text(name: str) -> str:
     """A vendored static file; ``report.js`` is the bundle of :data:`SCRIPT_PARTS`."""
     folder = resources.files("reports").joinpath("static")
     if name == "report.js":
@@ -268,8 +272,8 @@ def _page_context(self_contained: bool, *scripts: str) -> dict[str, Any]:
     context = {
         "self_contained": self_contained,
         "static": "../_static/",
-        "css": _static("report.css") if self_contained else "",
-        "js": _inline_script(_static("report.js")) if self_contained else "",
+        "css": static_text("report.css") if self_contained else "",
+        "js": _inline_script(static_text("report.js")) if self_contained else "",
     }
     context["script_hashes"] = (_script_hashes(*scripts, context["js"])
                                 if self_contained else "")
@@ -284,8 +288,8 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
               for view in views(comparison)]
     script = hdr_script(panels)
     hdr_inline = _inline_script(script) if self_contained else ""
-    data = {f"data_{p['view']}.js": data_script(p) for p in panels if p["data"] is not None}
-    data_inline = [_inline_script(text) for text in data.values()] if self_contained else []
+    data = page_scripts(panels, folder, self_contained=self_contained)
+    data_inline = [_inline_script(text) for text in data.inline]
     temporal = temporal_section(comparison, assets)
     temporal_js = temporal_script(temporal)
     temporal_inline = _inline_script(temporal_js) if self_contained and temporal_js else ""
@@ -307,7 +311,7 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
         "stability": jsonable(comparison.stability),
         "hdr_inline": hdr_inline,
         "data_inline": data_inline,
-        "data_files": [] if self_contained else list(data),
+        "data_files": list(data.sources),
         "preview_size": preview_size,
         "temporal": temporal,
         "temporal_inline": temporal_inline,
@@ -317,17 +321,15 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
     }
     if not self_contained:
         atomic_write_bytes(folder / "hdr.js", script.encode("utf-8"))
-        for name, text in data.items():
-            atomic_write_bytes(folder / name, text.encode("utf-8"))
         if temporal_js:
             atomic_write_bytes(folder / "temporal.js", temporal_js.encode("utf-8"))
-    html = _environment().get_template("scene.html.j2").render(context)
+    html = page_environment().get_template("scene.html.j2").render(context)
     atomic_write_bytes(folder / "index.html", html.encode("utf-8"))
 
 
 def _build_failure(failure: SceneFailure, folder: Path, *, self_contained: bool) -> None:
     folder.mkdir(parents=True, exist_ok=True)
-    html = _environment().get_template("failure.html.j2").render({
+    html = page_environment().get_template("failure.html.j2").render({
         "f": failure, "flux_budget": _flux_budget(failure),
         **_page_context(self_contained)})
     atomic_write_bytes(folder / "index.html", html.encode("utf-8"))
@@ -368,13 +370,13 @@ def write_index(out_dir: Path, rows: Sequence[dict[str, Any]], *,
     out_dir.mkdir(parents=True, exist_ok=True)
     if not self_contained:
         for name in ("report.css", "report.js"):
-            atomic_write_bytes(out_dir / "_static" / name, _static(name).encode("utf-8"))
-    html = _environment().get_template("index.html.j2").render({
+            atomic_write_bytes(out_dir / "_static" / name, static_text(name).encode("utf-8"))
+    html = page_environment().get_template("index.html.j2").render({
         "rows": rows, "key_metrics": KEY_METRICS, "formulas": METRIC_FORMULAS,
         "temporal": temporal_index(rows),
         "failed": sum(1 for r in rows if r["failure"]),
         "self_contained": self_contained, "static": "_static/",
-        "css": _static("report.css") if self_contained else "",
+        "css": static_text("report.css") if self_contained else "",
         "script_hashes": "",
     })
     index = out_dir / "index.html"

@@ -5,16 +5,12 @@ Each page's binary assets go either beside it (PNG and CSV files) or into it
 (``data:`` URIs, ``self_contained``); HDR previews always reach the page as
 ``data:`` URIs (see :mod:`reports.build`). Receiver maps are flipped so +v points up.
 
-Float data (:func:`view_data`, shipped by :func:`data_script`): per view, the
-displayed images as little-endian float32 in base64, row 0 at the top of the
-display, so that the page reads back the values it shows. Layers: ``method`` and
-``reference`` (H, W, 3); ``reference_se``, the reference's standard error
-``sqrt(Var[mean])`` (H, W, 3), when the record carries ``<view>/reference_variance``;
-``ssim`` and ``flip`` (H, W) when computed. The difference is not shipped: the page
-computes ``fround(method − reference)``, which is the float32 ``<view>/signed``
-(a float64 difference of the float32 images, rounded once). A preview box-filtered
-down by ``f`` holds box means: of the values, and for the standard error
-``sqrt(mean(Var) / f²)``, the standard error of a mean of f² independent pixels.
+Float data for the probe, profiles and canvases (:func:`reports.page_data.view_data`,
+``panel["data"]``): per view, the displayed images, rounded to 0.05 % and packed, a
+scene's reference shared by its method pages (see :mod:`reports.page_data`). A
+preview box-filtered down by ``f`` holds box means: of the values, and for the
+standard error ``sqrt(mean(Var) / f²)``, the standard error of a mean of f²
+independent pixels.
 """
 
 from __future__ import annotations
@@ -31,11 +27,12 @@ import numpy as np
 
 from reports import images, profiles
 from reports.display import luminance, white_point
+from reports.page_data import view_data
 from reports.records import SceneComparison
 from scenes.files import atomic_write_bytes
 
-__all__ = ["THUMBNAIL_SIZE", "Assets", "data_script", "hdr_script", "per_view", "thumbnails",
-           "view_data", "view_panels", "views"]
+__all__ = ["THUMBNAIL_SIZE", "Assets", "hdr_script", "per_view", "thumbnails", "view_panels",
+           "views"]
 
 THUMBNAIL_SIZE = 128
 _VIEW = re.compile(r"^(camera|receiver\d+)$")
@@ -153,27 +150,6 @@ def _map_panel(assets: Assets, view: str, kind: str, values: np.ndarray, *, vmin
     }
 
 
-def view_data(shown: dict[str, np.ndarray], *, factor: int) -> dict[str, Any]:
-    """The float layers of one view as shown (see the module docstring): ``width``,
-    ``height``, ``factor`` and ``layers`` of ``{"channels", "base64"}``."""
-    layers = {}
-    for name in ("method", "reference"):
-        layers[name] = np.asarray(shown[name], np.float32)
-    if "reference_variance" in shown:
-        # Var of a box mean of f² independent pixels is mean(Var) / f².
-        variance = np.maximum(np.nan_to_num(np.asarray(shown["reference_variance"],
-                                                       np.float64)), 0.0)
-        layers["reference_se"] = np.sqrt(variance / factor**2).astype(np.float32)
-    for name in ("ssim", "flip"):
-        if name in shown and np.ndim(shown[name]) == 2:
-            layers[name] = np.asarray(shown[name], np.float32)
-    h, w = layers["method"].shape[:2]
-    return {"width": int(w), "height": int(h), "factor": int(factor),
-            "layers": {name: {"channels": 1 if array.ndim == 2 else int(array.shape[2]),
-                              "base64": images.float32_base64(array)}
-                       for name, array in layers.items()}}
-
-
 def _default_profile(assets: Assets, view: str, raw: dict[str, np.ndarray], *, factor: int,
                      size: tuple[int, int]) -> dict[str, Any]:
     """The default profile of a receiver map (:func:`reports.profiles.default_profile`)
@@ -193,28 +169,18 @@ def _default_profile(assets: Assets, view: str, raw: dict[str, np.ndarray], *, f
 
 
 def hdr_script(panels: list[dict[str, Any]]) -> str:
-    """``window.causticsHdr``: each view's RGBE previews (used by the page only where
-    a view has no float data); ``window.causticsColormap``: the false-colour table
-    (:func:`reports.images.lookup_table`, 256 RGB bytes in base64)."""
+    """``window.causticsHdr``: the RGBE previews of each view without float data (the
+    page draws a view with data from its data); ``window.causticsColormap``: the
+    false-colour table (:func:`reports.images.lookup_table`, 256 RGB bytes in base64)."""
     lines = ["window.causticsHdr = window.causticsHdr || {};"]
     for panel in panels:
-        if panel["hdr"] is not None:
+        if panel["hdr"] is not None and panel["data"] is None:
             lines.append(f"window.causticsHdr[{json.dumps(panel['view'])}] = "
                          f"{json.dumps(panel['hdr'])};")
     table = images.data_uri(images.lookup_table(), mime="application/octet-stream")
     lines.append("window.causticsColormap = " + json.dumps(
         {"name": images.IRRADIANCE_COLORMAP, "base64": table.split(",", 1)[1]}) + ";")
     return "\n".join(lines) + "\n"
-
-
-def data_script(panel: dict[str, Any]) -> str:
-    """Script text that assigns one view's float data to
-    ``window.causticsData[view]`` (:func:`view_data`), or "" when it has none."""
-    if panel["data"] is None:
-        return ""
-    return ("window.causticsData = window.causticsData || {};\n"
-            f"window.causticsData[{json.dumps(panel['view'])}] = "
-            f"{json.dumps(panel['data'])};\n")
 
 
 def thumbnails(comparison: SceneComparison, folder: str, out_dir: Path,

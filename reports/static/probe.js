@@ -4,8 +4,9 @@
  * A/B) shows, for the pixel under the pointer, the method, reference and difference
  * values per channel and their luminance, in the view's units, and the reference's
  * standard error sqrt(Var[mean]) there, read from the view's float32 data
- * (view_data.js), so they are the EXR's values. A square marks the pixel on every
- * panel of the view.
+ * (view_data.js), so they are the EXR's values to within 0.05 % (the data's
+ * rounding, reports/page_data.py). A square marks the pixel on every panel of the
+ * view.
  *
  * The tooltip (div#probe) keeps the numbers in full in data attributes: data-view,
  * data-x and data-y (display pixel), data-exr ("x0 x1 y0 y1", EXR pixels) and one
@@ -40,7 +41,7 @@
     const method = report.pixel(data, "method", x, y);
     const reference = report.pixel(data, "reference", x, y);
     const se = report.pixel(data, "reference_se", x, y);
-    const difference = report.difference(method, reference);
+    const difference = report.pixel(data, "difference", x, y);
     return {
       method: method.concat([report.luminance(method)]),
       reference: reference.concat([report.luminance(reference)]),

@@ -161,7 +161,7 @@
   }
 
   async function setUpView(section, controls) {
-    const data = report.viewData(section.dataset.view);
+    const data = await report.viewData(section.dataset.view);
     const layers = await layersOf(section, data);
     report.zoom.attach(section);
     if (!layers) {

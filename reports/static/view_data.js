@@ -1,13 +1,23 @@
 /* caustics-harness report, shared part: the views' float data and helpers.
  *
- * Each view's data arrive in a script of their own (reports/panels.py, view_data):
- *   window.causticsData[view] = {width, height, factor,
- *                                layers: {name: {channels, base64}}}
- * with every layer little-endian float32 in C order, row 0 at the top of the display
- * (receiver maps flipped so +v points up). Layers: method, reference (3 channels),
- * reference_se (the reference's standard error sqrt(Var[mean]), 3 channels, when the
- * comparison carries the variance), ssim and flip (1 channel, when computed). A view
- * box-filtered down by `factor` holds box means (the page says so).
+ * Each view's sizes arrive in a script of their own (reports/page_data.py):
+ *   window.causticsData[view] = {width, height, factor, encoding,
+ *                                layers: {name: {channels, blob}}}
+ * and each layer's packed bytes in a blob script, shared by the pages of one scene
+ * (_data/<blob>.js beside the scene folders, inline on a self-contained page):
+ *   window.causticsBlobs[blob] = base64 of the packed bytes.
+ * Packed: float32 bit patterns, channels after the first XORed with the one before,
+ * channels planar, each row differenced from the left (mod 2^32), the four bytes of
+ * the values in four planes, zlib deflate (reports/page_data.py pack).
+ *
+ * Layers, row 0 at the top of the display (receiver maps flipped so +v points up):
+ * reference, difference (method − reference, the float32 <view>/signed) and
+ * method_exceptions (3 channels); reference_se (the reference's standard error
+ * sqrt(Var[mean]), 3 channels, when the comparison carries the variance); ssim and
+ * flip (1 channel, when computed). The method is fround(reference + difference),
+ * except where method_exceptions holds a number. Every value is within 0.05 % of
+ * the comparison's float32 (reports/page_data.py). A view box-filtered down by
+ * `factor` holds box means (the page says so).
  *
  * window.causticsColormap = {name, base64}: the false-colour table, 256 RGB bytes,
  * drawn by reports.images.lookup_table from matplotlib's colormap.
@@ -22,8 +32,6 @@
   /* Rec. 709 luma weights for linear RGB, as reports/display.py LUMA. */
   report.LUMA = [0.2126, 0.7152, 0.0722];
 
-  const littleEndian = new Uint8Array(new Uint16Array([1]).buffer)[0] === 1;
-
   function bytesOf(base64) {
     const text = atob(base64);
     const bytes = new Uint8Array(text.length);
@@ -33,33 +41,85 @@
     return bytes;
   }
 
-  function floatsOf(base64) {
-    const bytes = bytesOf(base64);
-    if (littleEndian) {
-      return new Float32Array(bytes.buffer);
-    }
-    const view = new DataView(bytes.buffer);
-    const out = new Float32Array(bytes.length / 4);
-    for (let i = 0; i < out.length; i++) {
-      out[i] = view.getFloat32(4 * i, true);
-    }
-    return out;
+  /* The packing reports/page_data.py pack writes; anything else is refused. */
+  const ENCODING = "f32-round10-xor-delta-shuffle-deflate";
+
+  async function inflate(bytes) {
+    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("deflate"));
+    return new Uint8Array(await new Response(stream).arrayBuffer());
   }
 
+  /* The float32 values (interleaved channels, C order) of one packed layer. The
+   * uint32 patterns are rebuilt arithmetically, so byte order does not matter. */
+  async function unpack(key, width, height, channels) {
+    const base64 = (window.causticsBlobs || {})[key];
+    if (base64 === undefined) {
+      throw new Error("data blob " + key + " was not loaded (_data/" + key + ".js)");
+    }
+    const bytes = await inflate(bytesOf(base64));
+    const n = width * height * channels;
+    if (bytes.length !== 4 * n) {
+      throw new Error("data blob " + key + " holds " + bytes.length + " bytes, not " + 4 * n);
+    }
+    const bits = new Uint32Array(n);
+    for (let c = 0; c < channels; c++) {
+      for (let y = 0; y < height; y++) {
+        const row = (c * height + y) * width;
+        let value = 0;
+        for (let x = 0; x < width; x++) {
+          const i = row + x;
+          const delta = bytes[i] | (bytes[n + i] << 8) | (bytes[2 * n + i] << 16) |
+            (bytes[3 * n + i] << 24);
+          value = (value + delta) >>> 0;
+          bits[(y * width + x) * channels + c] = value;
+        }
+      }
+    }
+    for (let p = 0; p < n; p += channels) {
+      for (let c = 1; c < channels; c++) {
+        bits[p + c] ^= bits[p + c - 1];
+      }
+    }
+    return new Float32Array(bits.buffer);
+  }
+
+  const decoded = {};
+
   /* The decoded float layers of one view ({width, height, factor, layers: {name:
-   * {channels, values}}}), or null when the page ships none for it. */
+   * {channels, values}}}, the method composed), or null when the page ships none
+   * for it. Decoded once per view. */
   report.viewData = function (view) {
     const raw = (window.causticsData || {})[view];
     if (!raw) {
-      return null;
+      return Promise.resolve(null);
+    }
+    if (!decoded[view]) {
+      decoded[view] = decodeView(raw);
+    }
+    return decoded[view];
+  };
+
+  async function decodeView(raw) {
+    if (raw.encoding !== ENCODING) {
+      throw new Error("unknown data encoding " + raw.encoding);
     }
     const layers = {};
-    for (const name of Object.keys(raw.layers)) {
+    await Promise.all(Object.keys(raw.layers).map(async (name) => {
       const layer = raw.layers[name];
-      layers[name] = { channels: layer.channels, values: floatsOf(layer.base64) };
+      layers[name] = { channels: layer.channels,
+                       values: await unpack(layer.blob, raw.width, raw.height, layer.channels) };
+    }));
+    const reference = layers.reference.values, difference = layers.difference.values;
+    const exceptions = layers.method_exceptions.values;
+    const method = new Float32Array(reference.length);
+    for (let i = 0; i < method.length; i++) {
+      // Float32Array stores fround(reference + difference) of the two float32 values.
+      method[i] = Number.isNaN(exceptions[i]) ? reference[i] + difference[i] : exceptions[i];
     }
+    delete layers.method_exceptions;
+    layers.method = { channels: layers.reference.channels, values: method };
     return { width: raw.width, height: raw.height, factor: raw.factor, layers: layers };
-  };
+  }
 
   /* The false-colour table: Uint8Array of 256 RGB triplets (grey ramp without one). */
   report.colormap = (function () {
@@ -91,12 +151,6 @@
       return rgb[0];
     }
     return report.LUMA[0] * rgb[0] + report.LUMA[1] * rgb[1] + report.LUMA[2] * rgb[2];
-  };
-
-  /* method − reference per channel: the difference of the two float32 values, rounded
-   * to float32 once, which is exactly <view>/signed (float64 difference, then float32). */
-  report.difference = function (method, reference) {
-    return method.map((value, c) => Math.fround(value - reference[c]));
   };
 
   /* Standard error of the luminance from the channels' standard errors: the upper

@@ -20,7 +20,8 @@ import pytest
 from harness.metrics import tonemap
 from reports import build_report, scene_folder
 from tests.conftest import REPO
-from tests.reports.conftest import HOSTILE_DESCRIPTION, HOSTILE_NAME, decode_uri, hdr_uris
+from tests.reports.conftest import HOSTILE_DESCRIPTION, HOSTILE_NAME
+from tests.reports.data_helpers import page_layers
 
 CHROMIUM = Path("/usr/bin/chromium")
 ARTIFACTS = REPO / "test-artifacts"
@@ -197,11 +198,11 @@ def test_canvas_tone_map_matches_the_metrics_tone_map(browser, reports, comparis
     root = reports["linked"] / "glass_sphere-paper"
     page, log = _open(browser, root / "index.html")
     _wait_ready(page)
-    uris = hdr_uris(root)
     for view in ("camera", "receiver0"):
         white = float(page.locator(f"#view-{view}").get_attribute("data-white"))
+        _, layers = page_layers(root, view)
         for layer in ("method", "reference"):
-            expected = np.round(tonemap(decode_uri(uris[view][layer]), white=white) * 255)
+            expected = np.round(tonemap(layers[layer], white=white) * 255)
             shown = _canvas(page, f'#view-{view} canvas.hdr[data-layer="{layer}"]')
             assert np.all(shown[..., 3] == 255)
             assert np.abs(shown[..., :3].astype(int) - expected).max() <= 1, (view, layer)

@@ -12,8 +12,10 @@ import numpy as np
 import pytest
 
 from reports import build_report, scene_folder
+from reports.page_data import RELATIVE_BOUND
 from reports.records import METRIC_FORMULAS, Table
-from tests.reports.conftest import HOSTILE_NAME, decode_uri, hdr_uris
+from tests.reports.conftest import HOSTILE_NAME, hdr_uris
+from tests.reports.data_helpers import page_layers
 
 
 @pytest.fixture(scope="module")
@@ -65,7 +67,7 @@ def test_layout_of_a_linked_report(linked, comparison):
         assert (scene / name).is_file(), name
     folders = sorted(p.name for p in linked.iterdir() if p.is_dir())
     hostile = scene_folder(f"{HOSTILE_NAME}-paper")
-    assert folders == sorted(["_static", "glass_sphere-paper", hostile])
+    assert folders == sorted(["_data", "_static", "glass_sphere-paper", hostile])
 
 
 def test_self_contained_report_is_one_file_per_page(embedded):
@@ -161,18 +163,19 @@ def test_exr_links_are_relative_and_flag_missing_files(tmp_path, comparison):
     assert "not found beside this page" in page.read_text()
 
 
-def test_hdr_previews_decode_to_the_images_receivers_flipped(linked, comparison):
-    """The shipped HDR data is the comparison's image (receiver maps upside down so
-    +v points up), within RGBE precision."""
-    uris = hdr_uris(linked / "glass_sphere-paper")
-    assert set(uris) == {"camera", "receiver0"}
+def test_views_with_float_data_ship_them_instead_of_hdr_previews(linked, comparison):
+    """A view with float data is drawn from them: its shipped method and reference are
+    the comparison's images (receiver maps upside down so +v points up) within the
+    data's promise, half the 0.1 % bound (``reports.page_data``), and ``hdr.js`` carries
+    no RGBE preview for it."""
+    assert hdr_uris(linked / "glass_sphere-paper") == {}
     for view, flip in (("camera", False), ("receiver0", True)):
+        _, layers = page_layers(linked / "glass_sphere-paper", view)
         for layer in ("method", "reference"):
             expected = np.asarray(comparison.images[f"{view}/{layer}"], np.float64)
             expected = expected[::-1] if flip else expected
-            decoded = decode_uri(uris[view][layer])
-            peak = expected.max(axis=-1, keepdims=True)
-            assert np.all(np.abs(decoded - expected) <= peak * 2.0**-7 + 1e-30), (view, layer)
+            error = np.abs(layers[layer] - expected)
+            assert np.all(error <= RELATIVE_BOUND / 2 * np.abs(expected)), (view, layer)
 
 
 def test_large_images_are_downsampled_and_the_page_says_so(tmp_path, comparison_factory):
@@ -180,8 +183,8 @@ def test_large_images_are_downsampled_and_the_page_says_so(tmp_path, comparison_
     build_report(tmp_path, [c], preview_size=128)
     html = (tmp_path / "glass_sphere-paper" / "index.html").read_text("utf-8")
     assert "box-filtered down 4×" in html
-    camera = decode_uri(hdr_uris(tmp_path / "glass_sphere-paper")["camera"]["method"])
-    assert camera.shape == (75, 100, 3)
+    _, camera = page_layers(tmp_path / "glass_sphere-paper", "camera")
+    assert camera["method"].shape == (75, 100, 3)
 
 
 def test_plots_are_valid_svg_with_the_pareto_front(linked):

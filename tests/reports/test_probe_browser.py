@@ -5,16 +5,16 @@ self-contained, plus the float data the pages get (no browser needed).
 The comparison is synthetic with known data (``tests.reports.conftest``, with the
 reference's variance); its EXRs are written by the harness's own writer
 (``harness.compare.outputs.write_comparison``) beside the linked page, and every value
-the page shows is checked against what those EXRs hold. Skipped with the reason when
-Chromium or playwright is missing (a failure under CI), as ``test_browser.py``.
+the page shows is checked against what those EXRs hold, to the data's promised
+rounding: half the 0.1 % bound (``reports.page_data.RELATIVE_BOUND / 2``; the data
+keep 10 mantissa bits, an error of at most 2^-11 = 4.9e-4). Skipped with the reason
+when Chromium or playwright is missing (a failure under CI), as ``test_browser.py``.
 """
 
 from __future__ import annotations
 
-import base64
 import csv
 import json
-import re
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -24,10 +24,12 @@ import pytest
 
 from harness.compare.outputs import write_comparison
 from renderers.exr import read_exr
-from reports import build_report, images
+from reports import build_report, images, page_data
 from reports.display import LUMA
+from reports.page_data import BLOB_FOLDER, RELATIVE_BOUND
 from reports.profiles import line_pixels
 from tests.conftest import REPO
+from tests.reports.data_helpers import blob_payload, page_layers
 from tests.reports.temporal_helpers import launch_browser
 from tests.reports.test_browser import PageLog
 
@@ -75,33 +77,44 @@ def browser(tmp_path_factory):
 
 # ---- the data the page gets -------------------------------------------------------
 
-def _page_data(script: str) -> dict:
-    """The object a ``data_<view>.js`` script assigns, with its layers decoded."""
-    data = json.loads(re.search(r"\] = (\{.*\});\s*$", script, re.S).group(1))
-    h, w = data["height"], data["width"]
-    for name, layer in data["layers"].items():
-        values = np.frombuffer(base64.b64decode(layer["base64"]), "<f4")
-        data["layers"][name] = values.reshape(h, w, layer["channels"]).squeeze()
-    return data
+#: What the data promise: every value within half the report's 0.1 % bound.
+PROMISED = RELATIVE_BOUND / 2
+
+
+def _close(shown, expected, *, scale=None) -> bool:
+    """``shown`` is ``expected`` to :data:`PROMISED`, relative to ``scale`` (by default
+    |expected|, per value): zero must stay exactly zero."""
+    expected = np.asarray(expected, np.float64)
+    scale = np.abs(expected) if scale is None else np.asarray(scale, np.float64)
+    return bool(np.all(np.abs(np.asarray(shown, np.float64) - expected) <= PROMISED * scale))
 
 
 def test_the_page_data_are_the_images_as_shown(pages, known):
-    """``data_<view>.js`` holds method, reference, SSIM and FLIP as float32, exactly
-    the comparison's (receiver maps flipped as shown), and the reference's standard
-    error sqrt(Var); the self-contained page carries the same scripts inline."""
+    """The data hold method, reference, difference (the float32 ``signed``), SSIM and
+    FLIP, and the reference's standard error sqrt(Var), each within :data:`PROMISED`
+    of the comparison's (receiver maps flipped as shown), with the method's zeros
+    exact; the self-contained page carries the same scripts inline."""
     folder = pages["linked"].parent
     embedded = pages["embedded"].read_text("utf-8")
     for view, flip in (("camera", False), ("receiver0", True)):
+        meta, layers = page_layers(folder, view)
         script = (folder / f"data_{view}.js").read_text("utf-8")
         assert script in embedded
-        data = _page_data(script)
-        assert data["factor"] == 1
-        for name in ("method", "reference", "ssim", "flip"):
-            expected = np.asarray(known.images[f"{view}/{name}"], np.float32)
-            assert np.array_equal(data["layers"][name], expected[::-1] if flip else expected)
+        for layer in meta["layers"].values():
+            blob = (folder.parent / BLOB_FOLDER / f"{layer['blob']}.js").read_text("ascii")
+            assert blob in embedded
+        assert meta["factor"] == 1
+        for name, kind in (("method", "method"), ("reference", "reference"),
+                           ("difference", "signed"), ("ssim", "ssim"), ("flip", "flip")):
+            expected = np.asarray(known.images[f"{view}/{kind}"], np.float32)
+            expected = expected[::-1] if flip else expected
+            assert layers[name].shape == expected.shape
+            assert _close(layers[name], expected), (view, name)
+        method = np.asarray(known.images[f"{view}/method"])
+        assert np.array_equal(layers["method"] == 0, (method[::-1] if flip else method) == 0)
         variance = np.asarray(known.images[f"{view}/reference_variance"], np.float64)
         se = np.sqrt(variance[::-1] if flip else variance).astype(np.float32)
-        assert np.array_equal(data["layers"]["reference_se"], se)
+        assert _close(layers["reference_se"], se)
 
 
 def test_previews_box_filtered_down_ship_box_means(tmp_path, comparison_factory):
@@ -109,14 +122,15 @@ def test_previews_box_filtered_down_ship_box_means(tmp_path, comparison_factory)
     of f² independent pixels, sqrt(mean(Var) / f²)."""
     c = comparison_factory(camera=(40, 60), receiver=(32, 32), variance=True)
     build_report(tmp_path, [c], preview_size=20)
-    data = _page_data((tmp_path / SCENE / "data_camera.js").read_text("utf-8"))
-    assert (data["factor"], data["height"], data["width"]) == (3, 13, 20)
+    meta, layers = page_layers(tmp_path / SCENE, "camera")
+    assert (meta["factor"], meta["height"], meta["width"]) == (3, 13, 20)
     method = np.asarray(c.images["camera/method"], np.float64)[:39, :60]
     means = method.reshape(13, 3, 20, 3, 3).mean(axis=(1, 3))
-    assert np.allclose(data["layers"]["method"], means, rtol=1e-6)
+    # The means are rounded to float32 (6e-8) before the data's own rounding.
+    assert _close(layers["method"], means, scale=np.abs(means) * (1 + 1e-6))
     variance = np.asarray(c.images["camera/reference_variance"], np.float64)[:39, :60]
     se = np.sqrt(variance.reshape(13, 3, 20, 3, 3).sum(axis=(1, 3)) / 9**2)
-    assert np.allclose(data["layers"]["reference_se"], se, rtol=1e-6)
+    assert _close(layers["reference_se"], se, scale=se * (1 + 1e-6))
 
 
 # ---- in the browser ---------------------------------------------------------------
@@ -176,8 +190,9 @@ def _canvas(page, selector: str) -> np.ndarray:
 @pytest.mark.parametrize("mode", ["linked", "embedded"])
 def test_hovering_shows_the_exr_values(browser, pages, known, exr, mode):
     """On every panel of both views, hovering a pixel shows the method, reference and
-    difference values of the EXRs (float32 equal, per channel, and their luminance),
-    the reference's standard error sqrt(Var), the SSIM and FLIP there, the EXR pixel
+    difference values of the EXRs (per channel within :data:`PROMISED`, and their
+    luminance within PROMISED of Σ w_c |v_c|, the most the channels' rounding can
+    move it), the reference's standard error sqrt(Var), the SSIM and FLIP there, the EXR pixel
     (receiver rows flipped back) and the units; no console error, nothing requested
     off the machine."""
     page, log = _open(browser, pages[mode])
@@ -203,14 +218,13 @@ def test_hovering_shows_the_exr_values(browser, pages, known, exr, mode):
             for name, kind in (("method", "method"), ("reference", "reference"),
                                ("difference", "signed")):
                 expected = exr[f"{view}/{kind}"][ey, x]
-                assert np.array_equal(np.float32(rows[name][:3]), expected), (panel, name)
-                assert rows[name][3] == pytest.approx(float(expected @ LUMA), rel=1e-6, abs=1e-9)
-            variance = np.float64(known.images[f"{view}/reference_variance"][ey, x])
-            assert np.array_equal(np.float32(rows["reference_se"][:3]),
-                                  np.sqrt(variance).astype(np.float32))
-            assert rows["reference_se"][3] == pytest.approx(float(np.sqrt(variance) @ LUMA))
+                assert _close(rows[name][:3], expected), (panel, name)
+                assert _close(rows[name][3], expected @ LUMA, scale=np.abs(expected) @ LUMA)
+            se = np.sqrt(np.float64(known.images[f"{view}/reference_variance"][ey, x]))
+            assert _close(rows["reference_se"][:3], se)
+            assert _close(rows["reference_se"][3], se @ LUMA)
             for name in ("ssim", "flip"):
-                assert np.float32(float(state["dataset"][name])) == exr[f"{view}/{name}"][ey, x, 0]
+                assert _close(float(state["dataset"][name]), exr[f"{view}/{name}"][ey, x, 0])
             shown = page.evaluate("(v) => window.causticsReport.format(v)", rows["method"][0])
             assert shown in state["text"] and units[view] in state["text"]
             squares = page.evaluate(f"""Array.from(document.querySelectorAll(
@@ -219,6 +233,7 @@ def test_hovering_shows_the_exr_values(browser, pages, known, exr, mode):
             assert squares == [[str(x), str(y)]] * 7
     if mode == "linked":
         assert any(r.endswith("/data_camera.js") for r in log.requests), log.requests
+        assert any(f"/{BLOB_FOLDER}/" in r for r in log.requests), log.requests
     assert all(r.startswith(("file:", "data:")) for r in log.requests), log.requests
     log.assert_clean()
     page.close()
@@ -241,7 +256,8 @@ def _samples(page, view: str) -> dict:
 
 
 def _check_samples(samples, exr, known, view, *, start, end):
-    """The plotted samples are the data along the line, pixel for pixel."""
+    """The plotted samples are the data along the line, pixel for pixel (to
+    :data:`PROMISED`)."""
     height = known.images[f"{view}/reference"].shape[0]
     xs, ys = line_pixels(start, end)
     assert samples["displayX"] == xs.tolist() and samples["displayY"] == ys.tolist()
@@ -249,11 +265,11 @@ def _check_samples(samples, exr, known, view, *, start, end):
     assert samples["x"] == xs.tolist() and samples["y"] == ey.tolist()
     for name in ("method", "reference"):
         expected = exr[f"{view}/{name}"][ey, xs]
-        assert np.array_equal(np.float32(samples[name]), expected), name
-        assert np.allclose(samples[f"{name}Lum"], expected.astype(np.float64) @ LUMA, rtol=1e-6)
+        assert _close(samples[name], expected), name
+        assert _close(samples[f"{name}Lum"], expected @ LUMA, scale=np.abs(expected) @ LUMA)
     se = np.sqrt(np.float64(known.images[f"{view}/reference_variance"][ey, xs]))
-    assert np.array_equal(np.float32(samples["stderr"]), se.astype(np.float32))
-    assert np.allclose(samples["stderrLum"], se @ LUMA, rtol=1e-6)
+    assert _close(samples["stderr"], se)
+    assert _close(samples["stderrLum"], se @ LUMA)
 
 
 @pytest.mark.parametrize("mode", ["linked", "embedded"])
@@ -268,11 +284,11 @@ def test_a_dragged_profile_plots_the_data(browser, pages, known, exr, mode):
         rows = list(csv.DictReader(f))
     assert [int(r["x"]) for r in rows] == default["x"]
     assert [int(r["y"]) for r in rows] == default["y"]
+    # The CSV holds the comparison's values, the page the data's (within PROMISED).
     for channel, c in (("r", 0), ("g", 1), ("b", 2)):
-        assert np.array_equal(np.float32([float(r[f"reference_{channel}"]) for r in rows]),
-                              np.float32([s[c] for s in default["reference"]]))
-    assert np.allclose([float(r["reference_se_lum"]) for r in rows], default["stderrLum"],
-                       rtol=1e-7)
+        assert _close([s[c] for s in default["reference"]],
+                      [float(r[f"reference_{channel}"]) for r in rows])
+    assert _close(default["stderrLum"], [float(r["reference_se_lum"]) for r in rows])
 
     start, end = (5, 80), (120, 10)
     _drag(page, _point(page, "camera", "reference", *start),
@@ -424,3 +440,108 @@ def test_zoom_and_pan_stay_in_sync(browser, pages, known):
         .map((z) => z.dataset.zoom)""")) == {"1 0 0"}
     log.assert_clean()
     page.close()
+
+
+# ---- two methods of one scene --------------------------------------------------------
+
+def _second_method(known):
+    """The same scene and reference with another method: the method 20 % brighter."""
+    images = dict(known.images)
+    for view in ("camera", "receiver0"):
+        method = np.asarray(images[f"{view}/method"], np.float64) * 1.2
+        images[f"{view}/method"] = method.astype(np.float32)
+        images[f"{view}/signed"] = (method.astype(np.float32).astype(np.float64)
+                                    - images[f"{view}/reference"]).astype(np.float32)
+    return replace(known, method="strong", images=images)
+
+
+@pytest.fixture(scope="module")
+def two_methods(tmp_path_factory, known) -> Path:
+    """A linked report of two methods of one scene, with their EXRs."""
+    root = tmp_path_factory.mktemp("probe-two-methods")
+    second = _second_method(known)
+    for c in (known, second):
+        write_comparison(root / c.page, c)
+    build_report(root, [known, second])
+    return root
+
+
+def test_two_method_pages_share_the_reference_data_written_once(tmp_path, known,
+                                                               monkeypatch):
+    """Both pages of a scene name the same reference and standard-error blobs, each
+    one file under ``_data``, written once: by the first page, not again by the
+    second, nor by building the report again; the methods' own blobs differ."""
+    writes: list[Path] = []
+    real_write = page_data.atomic_write_bytes
+
+    def counting(path, data):
+        writes.append(Path(path))
+        real_write(path, data)
+
+    monkeypatch.setattr(page_data, "atomic_write_bytes", counting)
+    second = _second_method(known)
+    build_report(tmp_path, [known, second])
+    blob_writes = [p for p in writes if p.parent.name == BLOB_FOLDER]
+    assert len(blob_writes) == len(set(blob_writes))
+    for view in ("camera", "receiver0"):
+        first, _ = page_layers(tmp_path / known.page, view)
+        other, _ = page_layers(tmp_path / second.page, view)
+        for name in ("reference", "reference_se"):
+            key = first["layers"][name]["blob"]
+            assert other["layers"][name]["blob"] == key
+            assert blob_writes.count(tmp_path / BLOB_FOLDER / f"{key}.js") == 1
+        for name in ("difference", "method_exceptions"):
+            assert first["layers"][name]["blob"] != other["layers"][name]["blob"]
+    stored = sorted((tmp_path / BLOB_FOLDER).iterdir())
+    assert len(stored) == len(blob_writes)
+    for path in stored:
+        assert blob_payload(path.read_text("ascii"))[0] == path.stem
+    writes.clear()
+    build_report(tmp_path, [known, second])
+    assert [p for p in writes if p.parent.name == BLOB_FOLDER] == []
+
+
+def test_a_two_method_report_stays_compact(tmp_path, comparison_factory):
+    """A two-method report of a small scene (96×128 camera, 64×64 receiver map) ships
+    its float data in fewer bytes than the raw float32 of what it must hold, each
+    once: per view the reference and its standard error (3 + 3 channels) and per
+    method the method, SSIM and FLIP (3 + 1 + 1; the difference follows from method
+    and reference). Pages that each carried all their layers as base64 float32, as
+    the report once did, take 2 × 11 channels × 4/3 = 29.3 channel-images, against
+    this bound's 6 + 2 × 5 = 16."""
+    first = comparison_factory(variance=True, seed=4)
+    second = _second_method(first)
+    build_report(tmp_path, [first, second])
+    pixels = sum(np.asarray(first.images[f"{view}/reference"]).shape[0]
+                 * np.asarray(first.images[f"{view}/reference"]).shape[1]
+                 for view in ("camera", "receiver0"))
+    bound = 4 * pixels * (6 + 2 * 5)
+    shipped = sum(p.stat().st_size for p in (tmp_path / BLOB_FOLDER).iterdir())
+    shipped += sum(p.stat().st_size for page in (first.page, second.page)
+                   for p in (tmp_path / page).glob("data_*.js"))
+    assert shipped <= bound, (shipped, bound)
+
+
+def test_both_method_pages_probe_the_shared_reference(browser, two_methods, known):
+    """Each of the two pages loads the one reference blob and shows, at the same pixel,
+    its own method and difference and the common reference, all within
+    :data:`PROMISED` of its EXRs."""
+    second = _second_method(known)
+    requested = {}
+    for c in (known, second):
+        folder = two_methods / c.page
+        page, log = _open(browser, folder / "index.html")
+        exr = {kind: read_exr(folder / f"camera_{kind}.exr")["RGB"]
+               for kind in ("method", "reference", "signed")}
+        page.mouse.move(*_point(page, "camera", "method", 40, 30))
+        rows = _probe(page)["rows"]
+        for name, kind in (("method", "method"), ("reference", "reference"),
+                           ("difference", "signed")):
+            assert _close(rows[name][:3], exr[kind][30, 40]), (c.method, name)
+        meta, _ = page_layers(folder, "camera")
+        key = meta["layers"]["reference"]["blob"]
+        requested[c.method] = [r for r in log.requests if r.endswith(f"/{key}.js")]
+        log.assert_clean()
+        page.close()
+    assert len(requested["paper"]) == 1
+    assert requested["paper"] == requested["strong"]
