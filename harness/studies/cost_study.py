@@ -4,23 +4,43 @@ Pareto front and the equal-error speedup (``harness.studies.pareto``), warm agai
 warm (the headline) and cold against cold.
 
 Error is the relMSE of receiver 0's caustic irradiance against the reference over
-the caustic region; time is that of the passes producing the receiver maps (the
+the caustic region, raw (``relmse``) and, given the reference's variance of the mean,
+its excess over the reference's own noise (``noise``, ``excess`` with its standard
+error and 95 % interval: :func:`harness.metrics.excess.excess_relative_mse` for the
+method's configurations, :func:`harness.studies.reference_curve.budget_error` for the
+reference's budgets); the speedup compares excesses (:mod:`harness.studies.pareto`).
+Time is that of the passes producing the receiver maps (the
 camera and shadow-map passes excluded), since the photon tracer it is compared
 with produces only those maps. Configurations vary one thing at a time around the scene's
 settings (grid, caustic-map size, splat width), plus every estimator at several
 iteration counts. The reference curve is :mod:`harness.studies.reference_curve`.
 Both sides are timed by one policy (:mod:`harness.studies.timing`): every row has
-``time_warm_s`` and ``time_cold_s``.
+``time_warm_s`` and ``time_cold_s``. The reference's curve is fitted on warm times; the
+cold speedup adds the reference's build and compile seconds to its fitted warm time
+(t_cold = t_build + t_compile + t_warm), since on cold times the one-off seconds would
+bend the curve away from a straight line in log-log.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
+from scipy.special import ndtri
 
 from harness.compare.evaluate import score_value
-from harness.studies.pareto import EqualErrorSpeedup, equal_error_speedup, pareto_front
+from harness.metrics.excess import excess_relative_mse
+from harness.studies.pareto import (
+    CONFIDENCE,
+    CurveFit,
+    CurveFitError,
+    EqualErrorSpeedup,
+    SpeedupUndefinedError,
+    fit_cost_curve,
+    pareto_front,
+    speedup_from_fit,
+)
 from harness.studies.reference_curve import SEED_OFFSET, reference_curve
 from harness.studies.runner import RealtimeRunner, caustic_seconds
 from harness.studies.timing import TIMING_POLICY, OneOffCosts
@@ -28,8 +48,14 @@ from reports.records import Table
 
 __all__ = ["COLUMNS", "CostOutcome", "cost_study", "sweep_configs"]
 
+#: The cost table's columns: ``relmse`` is raw (against the reference); ``noise`` the
+#: reference noise's expected share of it, ``excess`` the estimate against the noise-free
+#: image with ``excess_stderr`` and the 95 % interval ``excess_low`` .. ``excess_high``
+#: (model-based for the method, design-based for the reference's budgets; ``noise`` NaN
+#: and ``excess`` = ``relmse`` without the reference's variance).
 COLUMNS = ("series", "label", "estimator", "iterations", "grid", "caustic_map",
-           "splat_sigma", "time_warm_s", "time_cold_s", "relmse", "pareto")
+           "splat_sigma", "time_warm_s", "time_cold_s", "relmse", "pareto",
+           "noise", "excess", "excess_stderr", "excess_low", "excess_high")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -42,9 +68,12 @@ class CostOutcome:
         :data:`COLUMNS`, one row per configuration and reference budget.
     warm, cold : EqualErrorSpeedup or None
         Equal-error speedup of the scene's own settings, warm against warm and
-        cold against cold (None where an error is zero).
+        cold against cold, with its interval or bound (None where the curve cannot
+        be fitted or the method's excess interval lies below 0).
     point : (float, float)
-        That configuration's (warm time s, relMSE).
+        That configuration's (warm time s, raw relMSE).
+    fit : CurveFit or None
+        The reference curve's log-log fit (slope and its standard error).
     method, reference : OneOffCosts
         Each side's build and compile seconds.
     """
@@ -55,6 +84,7 @@ class CostOutcome:
     point: tuple[float, float]
     method: OneOffCosts
     reference: OneOffCosts
+    fit: CurveFit | None = None
 
     def timing(self) -> dict:
         """The policy and both sides' one-off costs (for metrics.json)."""
@@ -101,29 +131,69 @@ def _label(config: dict) -> str:
     return ", ".join(f"{k}={v}" for k, v in config.items() if k != "positions_map")
 
 
+def _method_error(image: np.ndarray, reference: np.ndarray, caustic: np.ndarray, *,
+                  variance, seeds, channel_correlation) -> dict:
+    """A configuration's raw relMSE and, with the reference's variance, its excess with
+    the model-based interval (the method's image is fixed, the reference's noise is the
+    randomness: :mod:`harness.metrics.excess`)."""
+    if variance is None:
+        raw = score_value("relmse", image, reference, mask=caustic, exposure=None)
+        return {"relmse": raw, "noise": math.nan, "excess": raw, "excess_stderr": 0.0,
+                "excess_low": raw, "excess_high": raw, "excess_dof": math.inf}
+    e = excess_relative_mse(image, reference, variance, seeds=seeds, mask=caustic,
+                            channel_correlation=channel_correlation)
+    return {"relmse": e.value, "noise": e.baseline, "excess": e.excess,
+            "excess_stderr": e.excess_stderr, "excess_low": e.excess_ci95[0],
+            "excess_high": e.excess_ci95[1], "excess_dof": e.degrees_of_freedom}
+
+
+def _curve_interval(excess: float, stderr: float) -> tuple[float, float]:
+    """A budget's normal 95 % interval (its design-based error has thousands of
+    texels behind it)."""
+    half = float(ndtri(0.5 + CONFIDENCE / 2)) * stderr
+    return excess - half, excess + half
+
+
 def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarray, *,
-               reference_photons: int, quick: bool = False, progress=None) -> CostOutcome:
+               reference_photons: int, quick: bool = False, progress=None,
+               reference_variance: np.ndarray | None = None,
+               reference_seeds: int | None = None,
+               channel_correlation: float = 1.0) -> CostOutcome:
     """Sweep the method's configurations and trace the reference's curve.
 
     Parameters
     ----------
     reference, caustic
-        Reference caustic irradiance of receiver 0 (W/m²) and its caustic region.
+        Reference caustic irradiance of receiver 0 (W/m², (H, W, 3)) and its caustic
+        region ((H, W) bool).
     reference_photons
         Photons per seed of the reference; the curve uses 1/256 .. 1/4 of it
         (1/64 .. 1/4 when ``quick``).
+    reference_variance : ndarray (H, W, 3), optional
+        The reference's variance of the mean per texel and channel ((W/m²)²). With it
+        both sides' errors are corrected for the reference's noise (module docstring);
+        without it they are raw and the speedup's interval covers the fit alone.
+    reference_seeds : int, optional
+        K, the seeds behind ``reference_variance`` (required with it).
+    channel_correlation : float
+        1 when the same photons carry all three channels, 0 for one pass per channel.
     """
+    if reference_variance is not None and reference_seeds is None:
+        raise ValueError("reference_variance needs reference_seeds")
+    noise_model = {"variance": reference_variance, "seeds": reference_seeds,
+                   "channel_correlation": channel_correlation}
     s = runner.settings
-    rows, warm_times = [], []
+    rows, warm_times, dofs = [], [], []
     configs = [({}, "scene settings"), *((c, _label(c)) for c in sweep_configs(
         quick=quick, splat=s.splat))]
     for config, label in configs:
         frame, seconds = runner.timed(clock=caustic_seconds, **config)
-        error = score_value("relmse", frame.result.receivers[0].irradiance, reference,
-                            mask=caustic, exposure=None)
+        error = _method_error(frame.result.receivers[0].irradiance, reference, caustic,
+                              **noise_model)
+        dofs.append(error.pop("excess_dof"))
         merged = {"estimator": s.estimator, "iterations": s.iterations, "grid": s.grid,
                   "caustic_map": s.caustic_map, "splat_sigma": s.splat_sigma, **config}
-        rows.append(_row("caustics_mapping", label, **merged, relmse=error))
+        rows.append(_row("caustics_mapping", label, **merged, **error))
         warm_times.append(seconds)
         if config and progress is not None:
             progress()
@@ -133,27 +203,41 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
     budgets = [max(1, reference_photons // f) for f in _fractions(quick)]
     curve = reference_curve(runner.scene, reference, caustic, budgets=budgets,
                             repeats=runner.repeats, seed=s.seed + SEED_OFFSET,
-                            progress=progress)
+                            progress=progress, **noise_model)
     for p in curve.points:
+        low, high = _curve_interval(p.excess, p.excess_stderr)
         rows.append(_row("reference", f"photons={p.photons}", estimator="", iterations=0,
                          grid=0, caustic_map=0, splat_sigma=0.0, time_warm_s=p.time_warm_s,
-                         time_cold_s=p.time_cold_s, relmse=p.relmse))
-    # The caustics-mapping rows come first, so front indices are row indices.
+                         time_cold_s=p.time_cold_s, relmse=p.relmse, noise=p.noise,
+                         excess=p.excess, excess_stderr=p.excess_stderr, excess_low=low,
+                         excess_high=high))
+    # The caustics-mapping rows come first, so front indices are row indices. The
+    # front is on raw relMSE, the axis the cost figure draws.
     realtime = [r for r in rows if r["series"] == "caustics_mapping"]
     front = set(pareto_front([r["time_warm_s"] for r in realtime],
                              [r["relmse"] for r in realtime]).tolist())
     table = Table.from_records(COLUMNS, [{**row, "pareto": i in front}
                                          for i, row in enumerate(rows)])
     base = rows[0]
-    errors = [p.relmse for p in curve.points]
-    speedups = {}
-    for kind in ("warm", "cold"):
-        t = base[f"time_{kind}_s"]
-        speedups[kind] = (equal_error_speedup(t, base["relmse"],
-                                              [getattr(p, f"time_{kind}_s") for p in curve.points],
-                                              errors)
-                          if t > 0 and base["relmse"] > 0 and all(e > 0 for e in errors)
-                          else None)
+    speedups: dict[str, EqualErrorSpeedup | None] = {"warm": None, "cold": None}
+    try:
+        fit = fit_cost_curve([p.time_warm_s for p in curve.points],
+                             [p.excess for p in curve.points],
+                             [p.excess_stderr for p in curve.points])
+    except CurveFitError:
+        fit = None
+    if fit is not None:
+        overheads = {"warm": 0.0, "cold": curve.one_off.build_s + curve.one_off.compile_s}
+        for kind, overhead in overheads.items():
+            t = base[f"time_{kind}_s"]
+            if not (t > 0 and math.isfinite(base["excess"])):
+                continue
+            try:
+                speedups[kind] = speedup_from_fit(
+                    t, base["excess"], fit, method_stderr=base["excess_stderr"],
+                    method_dof=dofs[0], overhead_s=overhead)
+            except (SpeedupUndefinedError, CurveFitError):
+                speedups[kind] = None
     return CostOutcome(table=table, warm=speedups["warm"], cold=speedups["cold"],
                        point=(base["time_warm_s"], base["relmse"]), method=method,
-                       reference=curve.one_off)
+                       reference=curve.one_off, fit=fit)
