@@ -111,11 +111,15 @@ def _render_commands(subparsers) -> None:
     _cache_options(p)
 
 
-def _cache_options(p: argparse.ArgumentParser) -> None:
-    """The reference-cache and progress options of the commands that render it."""
-    p.add_argument("--cache-dir", help="reference cache root (default $CAUSTICS_CACHE_DIR or "
-                   "~/.cache/caustics-harness/reference)")
-    p.add_argument("--no-cache", action="store_true", help="render references without the cache")
+_CACHE_ROOT = "$CAUSTICS_CACHE_DIR or ~/.cache/caustics-harness/reference"
+
+
+def _cache_options(p: argparse.ArgumentParser, *,
+                   cache: str = f"reference cache root (default {_CACHE_ROOT})",
+                   no_cache: str = "render references without the cache") -> None:
+    """The cache and progress options of the commands that render references."""
+    p.add_argument("--cache-dir", metavar="DIR", help=cache)
+    p.add_argument("--no-cache", action="store_true", help=no_cache)
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
@@ -237,13 +241,9 @@ def _sweep_command(subparsers) -> None:
                    "for its first worker (default %(default)s)")
     p.add_argument("--dry-run", action="store_true",
                    help="validate the sweep file, print the rows and their keys, run nothing")
-    p.add_argument("--cache-dir", metavar="DIR",
-                   help="cache root: the references, and the sweep's rows under "
-                   "sweep-results/ (default $CAUSTICS_CACHE_DIR or "
-                   "~/.cache/caustics-harness/reference)")
-    p.add_argument("--no-cache", action="store_true",
-                   help="compute every reference and row; read and write neither cache")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    _cache_options(p, cache="cache root: the references, and the sweep's rows under "
+                   f"sweep-results/ (default {_CACHE_ROOT})",
+                   no_cache="compute every reference and row; read and write neither cache")
 
 
 def _check_commands(subparsers) -> None:

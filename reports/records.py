@@ -152,6 +152,9 @@ class ClaimVerdict:
         Where ``standard_error`` comes from.
     text : str
         The sentence the report shows (verdict first, then the numbers).
+    ci95 : tuple of float or None
+        The 95 % interval (low, high) of ``value`` the verdict is read from (None:
+        not known).
     """
 
     claim: str
@@ -162,6 +165,7 @@ class ClaimVerdict:
     quantity: str
     uncertainty: str
     text: str
+    ci95: tuple[float, float] | None = None
 
     @property
     def margin(self) -> float:
@@ -194,24 +198,39 @@ class Headline:
 
 @dataclass(frozen=True)
 class MetricValue:
-    """One metric of the real-time render, beside the reference's noise floor.
+    """One metric of the method's render, with what the reference's noise alone would
+    give and the method's own (excess) error with its uncertainty.
 
     Attributes
     ----------
     view : str
         ``camera`` or ``receiver<i>``.
     region : str
-        ``full`` (the whole receiver map or image), ``caustic`` (reference above
-        the caustic threshold), ``object`` (camera pixels inside a caustic object's
-        silhouette: the object seen through) or ``object_masked`` (camera without
-        the object and its silhouette).
+        ``full`` (the whole receiver map or image), ``caustic`` (the union of the
+        method's caustic region and an independent reference's: never the scored
+        reference's own, which would select on its noise), ``object`` (camera pixels
+        inside a caustic object's silhouette: the object seen through) or
+        ``object_masked`` (camera without the object and its silhouette).
     metric : str
         A key of :data:`METRIC_FORMULAS`.
     value : float
-        Caustics mapping vs the reference.
+        The method against the reference.
     noise_floor : float or None
-        The same metric of an independent reference seed vs the reference: the
-        error the reference's own noise alone produces.
+        The same metric of an independent reference against the reference (it holds
+        both references' noise: twice what a perfect method scores on relMSE).
+    baseline : float or None
+        A perfect method's expected value against this reference (its noise alone).
+    excess : float or None
+        The method's own error against the noise-free image, estimated without bias
+        (``docs/statistics.md``): excess relMSE; SSIM baseline − value; FLIP value −
+        baseline; flux ratio − 1. None where the metric has no such estimator
+        (``relmse_trimmed``, ``psnr``) or the reference has no variance.
+    excess_stderr : float or None
+        Its standard error (the texel is the unit: a texel's channels are one sample).
+    excess_ci95 : (float, float) or None
+        Its 95 % interval.
+    distinguishable : bool or None
+        Whether the interval excludes 0: the method is measurably off the truth.
     """
 
     view: str
@@ -219,6 +238,19 @@ class MetricValue:
     metric: str
     value: float
     noise_floor: float | None = None
+    baseline: float | None = None
+    excess: float | None = None
+    excess_stderr: float | None = None
+    excess_ci95: tuple[float, float] | None = None
+    distinguishable: bool | None = None
+
+    @property
+    def interval_text(self) -> str:
+        """``excess ± stderr [low, high]`` for headlines and tables ('' if none)."""
+        if self.excess is None or self.excess_ci95 is None:
+            return ""
+        low, high = self.excess_ci95
+        return f"{self.excess:.3g} ± {self.excess_stderr:.2g} (95 % [{low:.3g}, {high:.3g}])"
 
 
 @dataclass(frozen=True)
@@ -677,47 +709,55 @@ class SceneComparison:
 
     # Typed views of the built-in studies' sections, for the report's own panels.
 
+    def _of(self, study: str, field_name: str, default: Any = None) -> Any:
+        """``field_name`` of the section ``study`` added, or ``default``."""
+        section = self.section(study)
+        return getattr(section, field_name) if section is not None else default
+
     @property
     def convergence(self) -> Table | None:
         """The convergence table (:class:`ConvergenceSection`), if that study ran."""
-        section = self.section("convergence")
-        return section.table if section is not None else None
-
-    @property
-    def cost(self) -> Table | None:
-        """The cost-versus-accuracy sweep (:class:`CostSection`), if that study ran."""
-        section = self.section("cost")
-        return section.table if section is not None else None
-
-    @property
-    def speedup(self) -> EqualErrorSpeedup | None:
-        """Warm-against-warm equal-error speedup; None when withheld or not run."""
-        section = self.section("cost")
-        return None if section is None or self.speedup_withheld else section.speedup
-
-    @property
-    def speedup_cold(self) -> EqualErrorSpeedup | None:
-        """Cold-against-cold equal-error speedup; None when withheld or not run."""
-        section = self.section("cost")
-        return None if section is None or self.speedup_withheld else section.speedup_cold
-
-    @property
-    def speedup_point(self) -> tuple[float, float] | None:
-        """The method's (time s, relMSE) the speedups were computed for."""
-        section = self.section("cost")
-        return section.point if section is not None else None
-
-    @property
-    def timing(self) -> dict[str, Any] | None:
-        """The cost study's timing policy and one-off costs, if it ran."""
-        section = self.section("cost")
-        return section.timing if section is not None else None
+        return self._of("convergence", "table")
 
     @property
     def claim_verdicts(self) -> tuple[ClaimVerdict, ...]:
         """The paper's claims with their numbers (from the convergence study)."""
-        section = self.section("convergence")
-        return section.claim_verdicts if section is not None else ()
+        return self._of("convergence", "claim_verdicts", ())
+
+    @property
+    def cost(self) -> Table | None:
+        """The cost-versus-accuracy sweep (:class:`CostSection`), if that study ran."""
+        return self._of("cost", "table")
+
+    @property
+    def speedup(self) -> EqualErrorSpeedup | None:
+        """Warm-against-warm equal-error speedup; None when withheld or not run."""
+        return None if self.speedup_withheld else self._of("cost", "speedup")
+
+    @property
+    def speedup_cold(self) -> EqualErrorSpeedup | None:
+        """Cold-against-cold equal-error speedup; None when withheld or not run."""
+        return None if self.speedup_withheld else self._of("cost", "speedup_cold")
+
+    @property
+    def speedup_point(self) -> tuple[float, float] | None:
+        """The method's (time s, relMSE) the speedups were computed for."""
+        return self._of("cost", "point")
+
+    @property
+    def timing(self) -> dict[str, Any] | None:
+        """The cost study's timing policy and one-off costs, if it ran."""
+        return self._of("cost", "timing")
+
+    @property
+    def temporal(self) -> TemporalComparison | None:
+        """The temporal study's record, if it ran."""
+        return self._of("temporal", "record")
+
+    @property
+    def decomposition(self) -> DecompositionRecord | None:
+        """The decomposition study's record, if it ran."""
+        return self._of("decomposition", "record")
 
     @property
     def claims(self) -> dict[str, str]:
@@ -729,18 +769,6 @@ class SceneComparison:
                 claims = getattr(s.record, "claims", None)
             out |= claims or {}
         return out
-
-    @property
-    def temporal(self) -> TemporalComparison | None:
-        """The temporal study's record, if it ran."""
-        section = self.section("temporal")
-        return section.record if section is not None else None
-
-    @property
-    def decomposition(self) -> DecompositionRecord | None:
-        """The decomposition study's record, if it ran."""
-        section = self.section("decomposition")
-        return section.record if section is not None else None
 
     @property
     def flux_budget(self) -> Table | None:

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from harness.compare.uncertainty import ExcessInputs, metric_excess
 from harness.metrics import (
     MetricInputError,
     flip_error,
@@ -76,18 +77,27 @@ METRICS = ("relmse", "relmse_trimmed", "psnr", "ssim", "flip", "flux_ratio")
 
 
 def score_view(view: str, method, reference, independent, *, regions: dict[str, np.ndarray],
-               exposure: Exposure) -> tuple[list[MetricValue], dict[str, np.ndarray]]:
-    """All metrics of one view over each region, with noise floors, and the maps.
+               exposure: Exposure, variance=None, seeds: int | None = None,
+               channel_correlation: float = 1.0,
+               ) -> tuple[list[MetricValue], dict[str, np.ndarray]]:
+    """All metrics of one view over each region, with noise floors, the method's
+    excess error with its interval where the reference has a variance
+    (:mod:`harness.compare.uncertainty`), and the maps.
 
     Parameters
     ----------
     view
         ``camera`` or ``receiver<i>``.
     method, reference, independent
-        (H, W, 3) linear images: caustics mapping, reference mean, and an independent
+        (H, W, 3) linear images: the method, the reference mean, and an independent
         reference of other seeds (``None`` skips the noise floor).
     regions
         Region name to boolean (H, W) mask; empty masks are skipped.
+    variance, seeds
+        The variance of the reference's mean per texel and channel, and the seeds K
+        it comes from (None: no excess errors).
+    channel_correlation
+        1 when the same photons carry all three channels, 0 for one pass per channel.
 
     Returns
     -------
@@ -95,9 +105,17 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
         The metric values, and ``{"<view>/signed", "<view>/ssim", "<view>/flip"}``
         maps over the full image.
     """
+    _, ssim_map = structural_similarity(method, reference, white=exposure.white, return_map=True)
+    _, flip_map = flip_error(method, reference, start_exposure=exposure.flip_start,
+                             stop_exposure=exposure.flip_stop, return_map=True)
+    inputs = None
+    if variance is not None and seeds is not None and seeds >= 2:
+        inputs = ExcessInputs(np.asarray(variance), int(seeds), channel_correlation,
+                              exposure.white, exposure.flip_start, exposure.flip_stop)
     values = []
-    for region, mask in regions.items():
-        if not np.asarray(mask).any():
+    for region, region_mask in regions.items():
+        mask = np.asarray(region_mask, bool)
+        if not mask.any():
             continue
         for metric in METRICS:
             value = score_value(metric, method, reference, mask=mask, exposure=exposure)
@@ -105,10 +123,9 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
             if independent is not None:
                 floor = score_value(metric, independent, reference, mask=mask,
                                     exposure=exposure)
-            values.append(MetricValue(view, region, metric, value, floor))
-    _, ssim_map = structural_similarity(method, reference, white=exposure.white, return_map=True)
-    _, flip_map = flip_error(method, reference, start_exposure=exposure.flip_start,
-                             stop_exposure=exposure.flip_stop, return_map=True)
+            excess = metric_excess(metric, method, reference, mask, inputs,
+                                   maps={"ssim": ssim_map, "flip": flip_map})
+            values.append(MetricValue(view, region, metric, value, floor, **excess))
     maps = {f"{view}/signed": signed_difference(method, reference).astype(np.float32),
             f"{view}/ssim": ssim_map.astype(np.float32),
             f"{view}/flip": flip_map.astype(np.float32)}

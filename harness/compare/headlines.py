@@ -5,14 +5,16 @@ and adds banners (``headlines``), and withholds the equal-error speedup where th
 error it is computed for means nothing (``speedup_withheld``). Rules:
 
 * **reference noise**: the reference stopped at its photon budget above its noise
-  target (``relative_noise > target_noise``, ``stopped_by == "budget"``). Every
-  metric and noise floor below carries that larger noise.
-* **noise floor**: the method's relMSE (receiver 0, caustic region) is at most its
-  noise floor, the relMSE of an independent reference seed against the reference.
-  A method without bias scores about half the floor (its error against the
-  reference is the reference's variance v, the floor's 2 v), so an error at or
-  below the floor is a bias no larger than the reference's own noise: the
-  comparison cannot tell the method from the reference.
+  target (``relative_noise > target_noise``, ``stopped_by == "budget"``), with its
+  relative noise per channel over the scored caustic region. Every interval below
+  is wider for it.
+* **verdict**: whether the method is measurably off the noise-free image: the 95 %
+  interval of its excess relMSE (receiver 0, caustic region;
+  :mod:`harness.compare.uncertainty`) excludes 0 or not, with the excess, its
+  interval, the raw value and what a perfect method would score against this
+  reference. (The old rule, "relMSE at most the noise floor", compared the method
+  with an independent reference scored against the reference, which holds twice
+  the reference's variance: a method 2 % off passed it.)
 * **speedup**: shown only when the error it is computed at is meaningful. It is
   withheld, with the reason, when
 
@@ -20,8 +22,8 @@ error it is computed for means nothing (``speedup_withheld``). Rules:
     black image (x = 0) scores mean r² / (r² + ε) < 1; an error of 1 or more is
     worse than rendering no caustic at all, not an estimate of it, and matching it
     takes the reference almost no photons;
-  - the error is within the noise floor (above): the reference's curve cannot be
-    read at errors its own noise hides;
+  - the method is not measurably off (above): the reference's curve cannot be read
+    at an error the comparison cannot tell from zero;
   - the reference's curve does not reach the error: its cheapest budget is already
     more accurate (``kind == "bound"``: only an upper bound), or the error is below
     the curve's best by more than :data:`EXTRAPOLATION_LIMIT` (4). The curve's
@@ -73,11 +75,12 @@ def _curve_errors(comparison: SceneComparison) -> list[float]:
             and math.isfinite(float(r["relmse"])) and float(r["relmse"]) > 0]
 
 
-def speedup_reason(error: float, noise_floor: float | None, kind: str,
+def speedup_reason(error: float, measurably_off: bool | None, kind: str,
                    curve_errors: list[float]) -> tuple[str, str] | None:
     """Why the equal-error speedup at relMSE ``error`` is withheld, as (a few words,
     a sentence with the numbers), or None to show it (module docstring: the bound,
-    the noise floor, the curve's reach)."""
+    the verdict, the curve's reach). ``measurably_off`` is the verdict on the
+    method's excess error (None: unknown, no reference variance)."""
     if error is None or not math.isfinite(error):
         return "relMSE not a number", "the method's relMSE is not a number"
     if error >= RELMSE_USABLE:
@@ -85,10 +88,11 @@ def speedup_reason(error: float, noise_floor: float | None, kind: str,
                 f"the method's relMSE is {error:.3g}, at or above {RELMSE_USABLE:g}: worse "
                 "than a black image (whose relMSE is below 1), so not an estimate whose "
                 "cost could be compared")
-    if noise_floor is not None and math.isfinite(noise_floor) and error <= noise_floor:
-        return ("error within the noise floor",
-                f"the method's relMSE {error:.3g} is within the reference's noise floor "
-                f"{noise_floor:.3g}: the reference's curve cannot be read at that error")
+    if measurably_off is False:
+        return ("not measurably off",
+                f"the method is not measurably off the noise-free image (its excess relMSE's "
+                f"95 % interval contains 0; raw relMSE {error:.3g}): the reference's curve "
+                "cannot be read at an error the comparison cannot tell from zero")
     if kind == "bound":
         return ("reference curve does not reach the error",
                 f"the reference's cheapest budget is already more accurate than the method "
@@ -108,23 +112,33 @@ def _noise_headlines(comparison: SceneComparison) -> list[Headline]:
     out = []
     ref = comparison.provenance.reference
     noise, target = ref.get("relative_noise"), ref.get("target_noise")
+    scored = (ref.get("relative_noise_scored") or {}).get("receiver0")
     if (ref.get("stopped_by") == "budget" and noise is not None and target is not None
             and math.isfinite(noise) and noise > target):
+        channels = (f"; per channel over the scored caustic region, R G B = "
+                    f"{', '.join(f'{n:.3g}' for n in scored)}" if scored else "")
         out.append(Headline("reference_noise", "warning", (
             f"The reference missed its noise target: it stopped at its photon budget "
             f"({ref.get('photons')} photons per seed, {ref.get('seeds')} seeds) with a "
-            f"relative noise of {noise:.3g} in the caustic region, against a target of "
-            f"{target:.3g}. Every metric and noise floor on this page carries that noise.")))
-    relmse = _relmse(comparison)
-    if (relmse is not None and relmse.noise_floor is not None
-            and math.isfinite(relmse.value) and math.isfinite(relmse.noise_floor)
-            and relmse.value <= relmse.noise_floor):
-        out.append(Headline("noise_floor", "warning", (
-            f"The method's error is within the reference's noise: relMSE {relmse.value:.3g} "
-            f"(receiver 0, caustic region) against a noise floor of {relmse.noise_floor:.3g} "
-            "(an independent reference seed against the reference). The comparison cannot "
-            "tell the method from the reference; a less noisy reference could.")))
+            f"relative noise of {noise:.3g} in its caustic region{channels}, against a "
+            f"target of {target:.3g}. Every interval on this page is wider for it.")))
     return out
+
+
+def _verdict_headline(comparison: SceneComparison) -> list[Headline]:
+    relmse = _relmse(comparison)
+    if relmse is None or relmse.excess is None or not math.isfinite(relmse.excess):
+        return []
+    numbers = (f"excess relMSE {relmse.interval_text} on receiver 0's caustic region "
+               f"(raw {relmse.value:.3g}; a perfect method would score {relmse.baseline:.3g} "
+               "against this reference)")
+    if relmse.distinguishable and relmse.excess > 0:
+        return [Headline("verdict", "note",
+                         f"Measurably off the noise-free image: {numbers}.")]
+    return [Headline("verdict", "warning", (
+        f"Not measurably off the noise-free image at this reference noise: {numbers}; the "
+        "interval contains 0, so the comparison cannot tell the method from the truth. A "
+        "less noisy reference could."))]
 
 
 def _speedup(comparison: SceneComparison) -> tuple[Headline | None, SpeedupWithheld | None]:
@@ -135,9 +149,9 @@ def _speedup(comparison: SceneComparison) -> tuple[Headline | None, SpeedupWithh
     relmse = _relmse(comparison)
     error = (comparison.speedup_point[1] if comparison.speedup_point is not None
              else relmse.value if relmse is not None else math.nan)
-    floor = relmse.noise_floor if relmse is not None else None
+    verdict = relmse.distinguishable if relmse is not None else None
     kind = (warm or cold).kind
-    reason = speedup_reason(error, floor, kind, _curve_errors(comparison))
+    reason = speedup_reason(error, verdict, kind, _curve_errors(comparison))
     if reason is None:
         text = f"Equal-error speedup, warm against warm: {warm.speedup:.3g}x ({warm.kind})" \
             if warm is not None else ""
@@ -161,7 +175,8 @@ def _checks_headline(comparison: SceneComparison) -> list[Headline]:
 def headlines_for(comparison: SceneComparison) -> tuple[tuple[Headline, ...],
                                                          SpeedupWithheld | None]:
     """The banners of ``comparison`` and the speedup it withholds (module docstring)."""
-    out = _checks_headline(comparison) + _noise_headlines(comparison)
+    out = (_checks_headline(comparison) + _noise_headlines(comparison)
+           + _verdict_headline(comparison))
     speedup, withheld = _speedup(comparison)
     if speedup is not None:
         out.append(speedup)

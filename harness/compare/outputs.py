@@ -103,8 +103,8 @@ def write_comparison(scene_dir: str | Path, comparison: SceneComparison) -> None
     scene_dir = Path(scene_dir)
     for key, name in comparison.files.items():
         image = comparison.images[key]
-        layer = image if image.ndim == 3 else image[..., None].repeat(3, axis=2)
-        write_exr(scene_dir / name, {"RGB": layer})
+        # A map (SSIM, FLIP) is one channel, Y; an image is RGB.
+        write_exr(scene_dir / name, {"RGB" if image.ndim == 3 else "Y": image})
     for section in comparison.sections:
         for name, table in section.tables().items():
             write_table(scene_dir / name, table)

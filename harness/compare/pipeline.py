@@ -242,6 +242,7 @@ def run_comparison(scene: Scene, method: Method, *,
         method_description=method.description, metrics=scored.metrics, images=scored.images,
         exposure=scored.exposure, files=scored.files,
         provenance=provenance(scene.source, method, render, references, notes=scored.notes,
+                              reference_noise=scored.reference_noise,
                               checks_not_applied=not_applied, crosscheck=cross, sweep=sweep),
         stability=stability, budgets=scored.budgets, sections=tuple(sections.values()),
         checks=found, crosscheck=table))

@@ -46,13 +46,16 @@ def method_provenance(method: Method, render: TimedRender) -> MethodProvenance:
 
 
 def provenance(scene_file: str, method: Method, render: TimedRender, references: References,
-               *, notes: tuple[str, ...] = (), checks_not_applied: dict | None = None,
+               *, notes: tuple[str, ...] = (), reference_noise: dict | None = None,
+               checks_not_applied: dict | None = None,
                crosscheck: dict | None = None, sweep: dict | None = None) -> Provenance:
-    """The provenance of one comparison."""
+    """The provenance of one comparison; ``reference_noise`` is the reference's
+    relative noise per channel over each view's scored caustic region."""
     reference, independent = references
     return Provenance(
         scene_file=scene_file, method=method_provenance(method, render),
         reference={**{k: reference.metadata.get(k) for k in REFERENCE_KEYS},
+                   "relative_noise_scored": reference_noise or {},
                    "timings_s": reference.timings, "timer": reference.timer},
         independent_reference={k: independent.metadata.get(k) for k in INDEPENDENT_KEYS},
         machine=machine(), notes=notes, checks_not_applied=checks_not_applied or {},

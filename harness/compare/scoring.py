@@ -31,12 +31,12 @@ from harness.compare.timed import TimedRender
 from renderers.results import RenderResult
 from reports.display import luminance
 from reports.records import FluxBudgets, MetricValue
-from scenes import Scene
+from scenes import Scene, effects_of
 from scenes.errors import HarnessError
 from scenes.geometry import SceneGeometry
 
-__all__ = ["NoCausticError", "References", "Scored", "camera_is_blind", "require_caustic",
-           "score_render", "views_of"]
+__all__ = ["NoCausticError", "References", "Scored", "camera_is_blind", "relative_noise",
+           "require_caustic", "score_render", "scored_caustic", "views_of"]
 
 
 class NoCausticError(HarnessError):
@@ -63,7 +63,8 @@ class References(NamedTuple):
 
 
 class View(NamedTuple):
-    """One scored image: the camera or a receiver map, with its regions."""
+    """One scored image: the camera or a receiver map, with its regions and the
+    variance of the reference's mean (None where it has none)."""
 
     name: str
     method: np.ndarray
@@ -72,6 +73,7 @@ class View(NamedTuple):
     regions: dict[str, np.ndarray]
     masks: dict[str, np.ndarray]
     exposure_mask: np.ndarray | None
+    variance: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,6 +97,9 @@ class Scored:
         Both sides' flux budgets.
     notes : tuple of str
         Views left out, and why.
+    reference_noise : dict
+        Per view, the reference's relative noise per channel over its scored caustic
+        region (:func:`relative_noise`): what every excess interval is made of.
     """
 
     metrics: tuple[MetricValue, ...]
@@ -104,6 +109,7 @@ class Scored:
     stability: dict
     budgets: FluxBudgets
     notes: tuple[str, ...] = field(default_factory=tuple)
+    reference_noise: dict = field(default_factory=dict)
 
 
 def require_caustic(reference: RenderResult, *, comparison=None) -> None:
@@ -148,25 +154,48 @@ def views_of(scene: Scene, geometry: SceneGeometry, method: RenderResult,
         if not ptracer:
             regions["object"] = object_region(scene.camera, geometry)
         views.append(View("camera", method.camera, reference.camera, independent.camera,
-                          regions, {"mask_object": obj}, ~obj if ptracer else None))
+                          regions, {"mask_object": obj}, ~obj if ptracer else None,
+                          reference.metadata.get("camera_variance")))
     for i, (method_map, ref_map, ind_map) in enumerate(zip(
             method.receivers, reference.receivers, independent.receivers, strict=True)):
-        caustic = caustic_region(ref_map.irradiance)
+        caustic = scored_caustic(method_map.irradiance, ind_map.irradiance)
         views.append(View(f"receiver{i}", method_map.irradiance, ref_map.irradiance,
                           ind_map.irradiance,
                           {"full": np.ones(caustic.shape, bool), "caustic": caustic},
-                          {"mask_caustic": caustic}, None))
+                          {"mask_caustic": caustic}, None, ref_map.variance))
     return views, notes
 
 
-def _score_views(views: list[View]):
+def scored_caustic(method: np.ndarray, independent: np.ndarray) -> np.ndarray:
+    """The caustic region a receiver map is scored over: the union of the method's
+    caustic region and an independent reference's (:func:`caustic_region` of each).
+
+    Not the scored reference's own: a region thresholded on the reference keeps the
+    texels where its noise happened to be high, which biases every excess estimate
+    (``harness.metrics.excess``); and light the method puts where the reference has
+    none is error too, so the method's region is in it."""
+    return caustic_region(method) | caustic_region(independent)
+
+
+def relative_noise(reference: np.ndarray, variance: np.ndarray, mask: np.ndarray
+                   ) -> list[float]:
+    """The reference's relative noise per channel over ``mask``: sqrt(Σ v_c) / Σ R_c,
+    the relative standard error of the region's flux in channel c (v the variance of
+    the mean per texel)."""
+    flux = np.asarray(reference, np.float64)[mask].sum(axis=0)
+    spread = np.sqrt(np.asarray(variance, np.float64)[mask].sum(axis=0))
+    return [float(s / f) if f > 0 else float("nan") for s, f in zip(spread, flux, strict=True)]
+
+
+def _score_views(views: list[View], *, seeds: int | None, channel_correlation: float):
     """Metrics, images, per-view exposure and EXR file names of every view."""
     metrics, images, files = [], {}, {}
     exposure = {"white": {}, "flip_start": {}, "flip_stop": {}, "diff_range": {}}
     for view in views:
         expo = exposure_for(view.reference, mask=view.exposure_mask)
         values, maps = score_view(view.name, view.method, view.reference, view.independent,
-                                  regions=view.regions, exposure=expo)
+                                  regions=view.regions, exposure=expo, variance=view.variance,
+                                  seeds=seeds, channel_correlation=channel_correlation)
         metrics += values
         images.update(maps)
         images[f"{view.name}/method"] = np.asarray(view.method, np.float32)
@@ -203,7 +232,11 @@ def score_render(scene: Scene, geometry: SceneGeometry, render: TimedRender,
     """Score ``render`` of ``scene`` against ``references`` (module docstring)."""
     result = render.result
     views, notes = views_of(scene, geometry, result, references)
-    metrics, images, exposure, files = _score_views(views)
+    seeds = references.reference.metadata.get("seeds")
+    # One photon carries all three channels, except where each channel is traced alone.
+    rho = 0.0 if "dispersion" in effects_of(scene) else 1.0
+    metrics, images, exposure, files = _score_views(
+        views, seeds=int(seeds) if seeds else None, channel_correlation=rho)
     images.update(_reference_variance(references.reference, views))
     stability = stability_summary(scene, geometry, result, hits=render.hits)
     sides = side_budgets(scene, result, stability, references.reference, hits=render.hits,
@@ -213,4 +246,7 @@ def score_render(scene: Scene, geometry: SceneGeometry, render: TimedRender,
                             references.reference.receivers),
         method=sides["method_budget"], reference=sides["reference_budget"],
         trace=sides["budget_trace"])
-    return Scored(metrics, images, exposure, files, stability, budgets, notes)
+    noise = {v.name: relative_noise(v.reference, v.variance, v.regions["caustic"])
+             for v in views if v.variance is not None and "caustic" in v.regions
+             and v.regions["caustic"].any()}
+    return Scored(metrics, images, exposure, files, stability, budgets, notes, noise)

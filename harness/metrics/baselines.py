@@ -43,8 +43,8 @@ from scipy.ndimage import gaussian_filter
 
 from harness.metrics.scores import MetricInputError, flip_error, structural_similarity
 
-__all__ = ["PerceptualBaseline", "PerceptualExcess", "denoised_reference", "flip_map",
-           "perceptual_baseline", "perceptual_excess", "ssim_map"]
+__all__ = ["PerceptualBaseline", "PerceptualExcess", "block_bootstrap", "denoised_reference",
+           "flip_map", "perceptual_baseline", "perceptual_excess", "ssim_map"]
 
 #: A metric map: (method, reference), both (H, W, 3) linear, to an (H, W) map.
 MetricMap = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -187,7 +187,7 @@ def perceptual_baseline(reference, variance, *, metric: MetricMap, trials: int =
                               trials=trials, baseline_map=stack.mean(axis=0))
 
 
-def _block_bootstrap(values: np.ndarray, mask: np.ndarray, *, block: int, resamples: int,
+def block_bootstrap(values: np.ndarray, mask: np.ndarray, *, block: int, resamples: int,
                      rng) -> np.ndarray:
     """Means of ``values`` over ``mask`` on ``resamples`` resamples of block × block
     tiles (with replacement, as many tiles as hold a masked texel)."""
@@ -241,7 +241,7 @@ def perceptual_excess(method, reference, variance, *, metric: MetricMap,
     excess_map = sign * (base.baseline_map - value_map)
     excess = float(excess_map[mask].mean())
     rng = np.random.default_rng(seed + 1)
-    boot = _block_bootstrap(excess_map, mask, block=block, resamples=resamples, rng=rng)
+    boot = block_bootstrap(excess_map, mask, block=block, resamples=resamples, rng=rng)
     stderr = float(np.hypot(boot.std(ddof=1), base.spread / np.sqrt(base.trials)))
     low, high = excess - Z95 * stderr, excess + Z95 * stderr
     return PerceptualExcess(value=float(value_map[mask].mean()), baseline=base.baseline,

@@ -69,21 +69,37 @@ def test_reference_that_missed_its_noise_target_gets_a_banner(tmp_path, comparis
         assert not any(h.kind == "reference_noise" for h in quiet.headlines), ok
 
 
-def test_error_within_the_noise_floor_gets_a_banner_and_no_speedup(tmp_path, comparison):
-    """Method target: an error at or below the noise floor (here the method's relMSE
-    set to 0.8 of the synthetic floor) means the comparison cannot tell the method
-    from the reference: a banner says so, and the speedup is withheld for the same
-    reason. The synthetic comparison itself (relMSE above its floor) gets neither."""
-    relmse = comparison.metric("receiver0", "caustic", "relmse")
-    assert relmse.value > relmse.noise_floor  # the fixture is the meaningful case
+def _with_excess(comparison, excess, low, high):
+    """``comparison`` with receiver 0's caustic relMSE excess and its interval set."""
+    metrics = tuple(
+        replace(m, baseline=0.0005, excess=excess, excess_stderr=(high - low) / 3.92,
+                excess_ci95=(low, high), distinguishable=low > 0 or high < 0)
+        if (m.view, m.region, m.metric) == ("receiver0", "caustic", "relmse") else m
+        for m in comparison.metrics)
+    return replace(comparison, metrics=metrics)
+
+
+def test_the_verdict_headline_gives_the_excess_and_its_interval(tmp_path, comparison):
+    """Method target (the reviewer's case: strong's excess 3.8e-4 ± 0.2e-4 was called
+    "within noise" by the old floor rule): an excess whose 95 % interval excludes 0 is
+    headlined "measurably off" with the numbers, and the speedup is shown; an
+    interval that contains 0 is headlined "not measurably off" and the speedup is
+    withheld for that reason. A comparison without a reference variance (the
+    fixture) gets no verdict."""
     plain = with_headlines(comparison)
-    assert not any(h.kind == "noise_floor" for h in plain.headlines)
-    assert plain.speedup is not None and plain.speedup_withheld is None
-    within = with_headlines(_with_relmse(comparison, 0.8 * relmse.noise_floor))
+    assert not any(h.kind == "verdict" for h in plain.headlines)
+    off = with_headlines(_with_excess(comparison, 3.8e-4, 3.4e-4, 4.2e-4))
+    (verdict,) = [h for h in off.headlines if h.kind == "verdict"]
+    assert verdict.text.startswith("Measurably off the noise-free image: excess relMSE 0.00038")
+    assert "95 % [0.00034, 0.00042]" in verdict.text
+    assert off.speedup is not None and off.speedup_withheld is None
+    within = with_headlines(_with_excess(comparison, 1e-5, -2e-5, 4e-5))
+    (verdict,) = [h for h in within.headlines if h.kind == "verdict"]
+    assert verdict.level == "warning" and "Not measurably off" in verdict.text
     assert within.speedup is None and within.speedup_cold is None
-    assert "noise floor" in within.speedup_withheld.reason
+    assert "not measurably off" in within.speedup_withheld.reason
     _, text = _page(tmp_path, within)
-    assert "The method's error is within the reference's noise" in text
+    assert "Not measurably off the noise-free image" in text
     assert "Equal-error speedup withheld" in text
 
 

@@ -63,9 +63,15 @@ def pages(tmp_path_factory, known) -> dict[str, Path]:
 
 @pytest.fixture(scope="module")
 def exr(pages):
-    """The EXR originals as written, by ``<view>/<kind>``."""
+    """The EXR originals as written, by ``<view>/<kind>`` (a one-channel map, SSIM or
+    FLIP, as (H, W, 1))."""
     folder = pages["linked"].parent
-    return {f"{view}/{kind}": read_exr(folder / f"{view}_{kind}.exr")["RGB"]
+
+    def layer(path):
+        layers = read_exr(path)
+        return layers["RGB"] if "RGB" in layers else layers["Y"][..., None]
+
+    return {f"{view}/{kind}": layer(folder / f"{view}_{kind}.exr")
             for view in ("camera", "receiver0") for kind in KINDS}
 
 
