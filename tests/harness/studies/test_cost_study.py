@@ -63,7 +63,6 @@ def test_cost_table_and_speedups_carry_the_correction_and_intervals():
         assert r["excess"] < r["relmse"]
     warm, cold = outcome.warm, outcome.cold
     assert warm is not None and cold is not None
-
     assert warm.low <= warm.speedup <= warm.high
     assert math.isfinite(warm.slope) and warm.slope < 0 and warm.slope_stderr > 0
     assert warm.slope == outcome.fit.slope
