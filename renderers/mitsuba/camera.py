@@ -29,12 +29,19 @@ import numpy as np
 
 from renderers.mitsuba import _mi
 from renderers.mitsuba.exporter import export_scene, sensor_dict
-from renderers.mitsuba.photons import MAX_SPECULAR_EVENTS
+from renderers.mitsuba.photons import ROULETTE_FROM
 from scenes import effects_of, event_chain
 from scenes.geometry import SceneGeometry, build_geometry
 from scenes.model import Scene
 
-__all__ = ["CAMERA_LIMITS", "camera_cut_fraction", "camera_max_depth", "render_camera"]
+__all__ = ["CAMERA_LIMITS", "MAX_SPECULAR_EVENTS", "camera_cut_fraction", "camera_max_depth",
+           "render_camera"]
+
+#: Specular events a camera path may have in all-paths mode (ptracer and the camera
+#: tracer): the events the photon tracer follows for certain before its Russian
+#: roulette. The camera integrators cut there; what they cut is measured and recorded
+#: (:func:`camera_cut_fraction`, the camera tracer's stopped samples).
+MAX_SPECULAR_EVENTS = ROULETTE_FROM
 
 CAMERA_LIMITS = (
     "specular objects seen directly render black (ptracer)",

@@ -45,6 +45,7 @@ import numpy as np
 from tqdm import tqdm
 
 from renderers.mitsuba import _mi
+from renderers.mitsuba.camera import MAX_SPECULAR_EVENTS
 from renderers.mitsuba.camera_lookup import (
     FOOTPRINT_PERCENTILE,
     LOOKUP_CAP,
@@ -55,7 +56,7 @@ from renderers.mitsuba.camera_lookup import (
 from renderers.mitsuba.camera_shading import camera_event, receiver_radiance
 from renderers.mitsuba.exporter import channel_mask, export_scene
 from renderers.mitsuba.noise import seed_statistics
-from renderers.mitsuba.photons import MAX_SPECULAR_EVENTS, PhotonTracer, chain_code, lane_rng
+from renderers.mitsuba.photons import PhotonTracer, chain_code, lane_rng
 from scenes import effects_of, event_chain
 from scenes.geometry import SceneGeometry, build_geometry
 from scenes.model import DiffuseMaterial, Scene

@@ -20,21 +20,26 @@ A photon's weight is "flux times N": the caller divides by the photon count N.
 Stratified, coherent lanes
 --------------------------
 The two uniform numbers (u1, u2) that place a photon in its cone, disk or
-rectangle come from :func:`stratified_square`: with s the largest power of two
-with s^2 <= n (the launch's lane count), the first m = s^2 floor(n / s^2) lanes
-sweep the cells of an s x s grid (lane i takes cell i mod s^2, in Morton order)
-floor(n / s^2) times, each lane jittered uniformly inside its cell; the other
-n - m lanes draw (u1, u2) independently and uniformly. Each full sweep visits
-every cell once, and a point uniform in a cell of area 1 / s^2 has
-E[f | cell] = s^2 * (integral of f over the cell), so the sum of f(u) over a sweep
-has expectation sum_cells E[f | cell] = s^2 * (integral of f over [0, 1)^2),
-exactly what s^2 independent uniform samples have. Every estimate keeps its
-expectation with the same pdf and weight per photon; only the photons of one
-launch are no longer independent (they are spread more evenly, which lowers the
-variance). Launches, seeds and streams stay independent, so the K-seed variance
-of the mean is still an unbiased variance estimate. Neighbouring lanes leave in
-neighbouring directions, which makes the ray packets coherent: the ray casts,
-most of the kernel's time, are much faster.
+rectangle come from :func:`stratified_square`, stratified at the launch's own
+lane count n, whatever n is: the unit square is cut into n strata of area 1 / n
+each, and lane i draws one point uniformly in stratum i. The strata are n equal
+pieces of a Morton (Z-order) curve through a fine 2^15 x 2^15 grid of M = 2^30
+cells: lane i draws a position t uniformly in [i M / n, (i + 1) M / n) along the
+curve, takes the cell floor(t) the curve visits there, and a point uniform in that
+cell. Lane i's point then has the density
+p_i(x) = n * |stratum i meets cell(x)| / |cell(x)| (lengths along the curve), and
+sum_i p_i(x) = n for every x: the strata tile the curve, so the sum over the lanes
+of f(u) has expectation n * (integral of f over [0, 1)^2), exactly what n
+independent uniform samples have. Every estimate keeps its expectation with the
+same pdf and weight per photon; only the photons of one launch are no longer
+independent (they are spread more evenly, which lowers the variance). When n is a
+power of four, 4^k, stratum i is exactly cell i of a 2^k x 2^k grid in Morton order
+(a 2^(15 - k) x 2^(15 - k) block of fine cells), and the point is uniform in it. No
+lane is unstratified, so a launch of any size (a partial last launch of a budget
+too) is stratified at its own size. Launches, seeds and streams stay independent,
+so the K-seed variance of the mean is still an unbiased variance estimate.
+Neighbouring lanes leave in neighbouring directions, which makes the ray packets
+coherent: the ray casts, most of the kernel's time, are much faster.
 """
 
 from __future__ import annotations
@@ -49,7 +54,8 @@ from renderers.mitsuba.exporter import area_light_frame
 from scenes.geometry import TriangleMesh
 from scenes.model import AreaLight, DirectionalLight, PointLight, SpotLight
 
-__all__ = ["Target", "bounding_sphere", "sample_photons", "stratified_square"]
+__all__ = ["MAX_STRATIFIED_LANES", "Target", "bounding_sphere", "sample_photons",
+           "stratified_square"]
 
 #: Share of photons aimed at caustic objects when the direct term is also sampled
 #: (the caustic region is where the reference must be least noisy).
@@ -151,31 +157,57 @@ def _morton_compact(v):
     return (v | (v >> 8)) & 0x0000FFFF
 
 
-def stratified_square(rng, n: int):
-    """Per-lane (u1, u2), each uniform on [0, 1)^2, stratified over the lanes.
+def _fixed_to_unit(q):
+    """q / 2^31 as a float32 in [0, 1), for a UInt32 q < 2^31, rounded toward zero."""
+    mi, dr, _ = _mi.load()
+    length = 32 - dr.lzcnt(q)  # significant bits of q
+    drop = dr.maximum(length, 24) - 24
+    return mi.Float((q >> drop) << drop) * (1.0 / (1 << 31))
 
-    Lanes below the last whole sweep of the s x s grid take jittered cells in
-    Morton order (two numbers from ``rng`` each); the rest are independent uniform
-    (see the module docstring).
+
+#: Morton bits per axis of the fine grid the strata are cut from (M = 4^15 cells).
+_CURVE_BITS = 15
+#: Most lanes a launch may stratify (one stratum per lane: at least one fine cell each).
+MAX_STRATIFIED_LANES = 1 << (2 * _CURVE_BITS)
+
+
+def stratified_square(rng, n: int):
+    """Per-lane (u1, u2), each uniform on [0, 1)^2, stratified over the ``n`` lanes.
+
+    Lane i draws a point uniformly in stratum i of n equal strata along a Morton
+    curve (see the module docstring): from ``rng``, one float64 per lane (the position
+    along the curve) and one 32-bit integer (the point in the fine cell, 16 bits per
+    axis).
+
+    Raises
+    ------
+    ValueError
+        ``n`` is not in 1 .. :data:`MAX_STRATIFIED_LANES`.
     """
     mi, dr, _ = _mi.load()
-    side = 1 << (max(int(n), 1).bit_length() - 1) // 2  # largest power of 2, side^2 <= n
-    # Every value that depends on n enters as an opaque variable, not a literal:
-    # one compiled kernel then serves every launch size (the cost study times
-    # budgets from 1/256 to 1/4 of the reference's, and must not time a compile
-    # for each).
-    s = dr.opaque(mi.Float, side)
-    mask = dr.opaque(mi.UInt32, side * side - 1)
-    swept = dr.opaque(mi.UInt32, (n // (side * side)) * side * side)
+    if not 1 <= int(n) <= MAX_STRATIFIED_LANES:
+        raise ValueError(f"a stratified launch has 1 to {MAX_STRATIFIED_LANES} lanes, got {n}")
+    # M / n, the stratum's length in fine cells, enters as an opaque variable, not a
+    # literal: one compiled kernel then serves every launch size (the cost study times
+    # budgets from 1/256 to 1/4 of the reference's, and must not time a compile for
+    # each).
+    cells = 1 << (2 * _CURVE_BITS)
+    stride = dr.opaque(mi.Float64, cells / int(n))
     lane = dr.arange(mi.UInt32, n)
-    cell = lane & mask
+    # t = (i + j) M / n in float64, j uniform with 52 bits: i + j < n resolves steps
+    # of n 2^-53 strata, i.e. 2^-23 fine cells whatever n, and the product's rounding
+    # (2^-53 relative, t < 2^30) is as small: the cell floor(t) is uniform over the
+    # stratum's cells to that precision.
+    t = (mi.Float64(lane) + rng.next_float64()) * stride
+    cell = dr.minimum(mi.UInt32(dr.floor(t)), cells - 1)
     x, y = _morton_compact(cell), _morton_compact(cell >> 1)
-    ju, jv = rng.next_float32(), rng.next_float32()
-    strat = lane < swept
-    # (x + j) / s < 1 in exact arithmetic; float rounding could give 1.0 at x = s - 1.
-    one_minus = float(np.nextafter(np.float32(1), np.float32(0)))
-    u = dr.select(strat, dr.minimum((mi.Float(x) + ju) / s, one_minus), ju)
-    v = dr.select(strat, dr.minimum((mi.Float(y) + jv) / s, one_minus), jv)
+    # The point inside the fine cell: 16 bits per axis below the cell's 15, a 31-bit
+    # fixed-point coordinate q / 2^31. It is truncated to the 24 significant bits a
+    # float32 holds before the conversion, which is then exact: rounding to nearest
+    # could carry a point across its cell's upper edge (or to 1.0).
+    bits = rng.next_uint32()
+    u = _fixed_to_unit((x << 16) | (bits & 0xFFFF))
+    v = _fixed_to_unit((y << 16) | (bits >> 16))
     return u, v
 
 
