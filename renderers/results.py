@@ -14,7 +14,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ReceiverMap", "RenderResult", "texel_centers"]
+__all__ = ["CAUSTIC_FRACTION", "LUMA", "ReceiverMap", "RenderResult", "caustic_region",
+           "texel_centers"]
+
+#: Rec. 709 luminance weights of linear RGB (the report's luminance uses the same).
+LUMA = np.array([0.2126, 0.7152, 0.0722])
+#: A texel is in the caustic region when the reference's luminance exceeds this
+#: fraction of its 99.5th percentile (a robust maximum that ignores fireflies).
+CAUSTIC_FRACTION = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,6 +82,22 @@ class RenderResult:
     timings: dict[str, float] = field(default_factory=dict)
     timer: str = ""
     metadata: dict[str, Any] = field(default_factory=dict)
+
+
+def caustic_region(reference: np.ndarray, *, fraction: float = CAUSTIC_FRACTION) -> np.ndarray:
+    """Boolean (H, W) mask where ``reference`` (H, W, 3, linear RGB; or (H, W)
+    luminance) is bright enough to be caustic: the region a comparison scores, and
+    the region the Mitsuba reference measures its own noise over.
+
+    The threshold is ``fraction`` x the 99.5th percentile of the luminance
+    (:data:`LUMA`); an all-black reference gives an empty mask.
+    """
+    image = np.asarray(reference, np.float64)
+    lum = image if image.ndim == 2 else image @ LUMA
+    top = float(np.percentile(lum, 99.5))
+    if top <= 0:
+        return np.zeros(lum.shape, bool)
+    return lum > fraction * top
 
 
 def texel_centers(extent, shape) -> tuple[np.ndarray, np.ndarray]:

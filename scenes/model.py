@@ -502,7 +502,11 @@ class Settings:
     )
     # Mitsuba reference
     photons: int = spec(
-        2_000_000, doc="Photon budget of the reference photon tracer per seed.", ge=1
+        2_097_152, doc="Starting photon budget of the reference photon tracer per seed, "
+        "traced in launches of 2^20 photons (the default is two whole launches; a "
+        "remainder is one smaller launch). Past it the reference traces more launches "
+        "while its noise is above `target_noise` and the target is in reach within "
+        "`reference_time_cap`.", ge=1,
     )
     spp: int = spec(16, doc="Reference camera samples per pixel per seed (camera tracer: "
                      "stratified subpixel samples, 4 x 4 by default; ptracer: particles per "
@@ -511,7 +515,14 @@ class Settings:
     seeds: int = spec(4, doc="Independent seeds K for the reference's variance.", ge=1, le=64)
     target_noise: float = spec(
         0.01, doc="Stop when the reference's relative noise in the caustic region "
-        "is below this.", gt=0,
+        "is below this: the RMS relative standard error of each RGB channel over the "
+        "region the comparison scores, the largest channel's.", gt=0,
+    )
+    reference_time_cap: float = spec(
+        120.0, doc="Time cap of the reference's receiver maps (all seeds, wall clock "
+        "from their start): launches past the starting `photons` budget are traced only "
+        "while `target_noise` looks reachable within it, and never after it.",
+        unit="s", gt=0,
     )
     all_specular_paths: bool = spec(
         False, doc="Count every L S+ D path, not only the chains the effects name."

@@ -5,28 +5,23 @@ from __future__ import annotations
 import numpy as np
 
 from harness.raycast import MeshTracer, camera_rays
-from reports.display import luminance
+from renderers.results import CAUSTIC_FRACTION
+from renderers.results import caustic_region as _reference_region
 from scenes.geometry import SceneGeometry
 from scenes.model import Camera
 
 __all__ = ["CAUSTIC_FRACTION", "caustic_region", "object_mask", "object_region"]
-
-#: A texel is in the caustic region when the reference's luminance exceeds this
-#: fraction of its 99.5th percentile (a robust maximum that ignores fireflies).
-CAUSTIC_FRACTION = 0.1
 
 
 def caustic_region(reference: np.ndarray, *, fraction: float = CAUSTIC_FRACTION) -> np.ndarray:
     """Boolean (H, W) mask where ``reference`` (H, W, 3) is bright enough to be caustic.
 
     The threshold is ``fraction`` × the 99.5th percentile of the luminance; an
-    all-black reference gives an empty mask.
+    all-black reference gives an empty mask. The rule lives with the result types
+    (:func:`renderers.results.caustic_region`), so the Mitsuba reference measures its
+    noise over the same region.
     """
-    lum = luminance(reference)
-    top = float(np.percentile(lum, 99.5))
-    if top <= 0:
-        return np.zeros(lum.shape, bool)
-    return lum > fraction * top
+    return _reference_region(reference, fraction=fraction)
 
 
 def _object_hits(camera: Camera, geometry: SceneGeometry) -> np.ndarray:

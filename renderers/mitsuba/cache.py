@@ -70,8 +70,13 @@ __all__ = ["CAMERA_INTEGRATORS", "FORMAT_VERSION", "STALE_AFTER", "CacheEntryErr
 #: 5: the key leaves out the scene's name and description, result.json records each
 #: EXR's size and its own digest (``shapes``, ``document_sha256``); 6: the camera image
 #: is the camera tracer's by default (``camera_integrator``, part of the key); 7: a
-#: photon drawn on its emission cone's or disk's edge no longer gets an infinite weight
-FORMAT_VERSION = 7
+#: photon drawn on its emission cone's or disk's edge no longer gets an infinite weight;
+#: 8: every launch stratified at its own size (Morton-curve strata), the default budget
+#: two whole launches, the noise per RGB channel over the comparison's caustic region
+#: with launches past the budget until the target (``relative_noise_per_channel``,
+#: ``reference_time_cap``, ``stopped_by`` ``time_cap``), and all-paths mode plays
+#: Russian roulette past 64 events up to a 4096-event safety cap
+FORMAT_VERSION = 8
 RESULT_JSON = "result.json"
 #: Camera integrators of the reference (``render_reference(camera=...)``), and the name
 #: each records as ``camera_integrator`` in its metadata.
@@ -262,7 +267,14 @@ _OPTIONAL = {
     "seed": _is_int,
     "seeds": _is_int,
     "relative_noise": _is_number_or_null,
+    "relative_noise_per_channel": lambda v: v is None or (
+        isinstance(v, list) and len(v) == 3 and all(_is_number_or_null(x) for x in v)),
+    "noise_region_texels": lambda v: v is None or (
+        isinstance(v, list) and all(_is_int(x) for x in v)),
     "target_noise": _is_number_or_null,
+    "reference_time_cap": _is_number_or_null,
+    "roulette_from": _is_int,
+    "roulette_survival": _is_number_or_null,
     "stopped_by": lambda v: isinstance(v, str),
     "noise_history": lambda v: isinstance(v, list) and all(
         isinstance(row, list) and len(row) == 3 and all(_is_number_or_null(x) for x in row)

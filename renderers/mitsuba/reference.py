@@ -1,10 +1,24 @@
 """The cached Mitsuba reference of a scene: K seeds, noise target, budget.
 
-Receiver maps: each round traces one batch per seed (K independent PCG32
-streams), then the per-seed estimates give the mean, the variance of the mean and
-the relative noise in the caustic region (:mod:`.noise`); rounds stop when the
-noise is at most ``settings.target_noise`` or every seed has used
-``settings.photons``. Camera image: K seeds of ``settings.spp`` samples per
+Receiver maps: each round traces one launch per seed (K independent PCG32
+streams): first the launches of :func:`.photons.launch_plan` for the starting budget
+``settings.photons`` (whole launches of 2^20 photons, a remainder as one smaller
+launch, every launch stratified at its own size), then whole launches. After each
+round, the per-seed estimates (each seed's sums over its photons so far / those
+photons; every seed traces the same launches) give the mean, the variance of the
+mean and the relative noise per channel in the caustic region the comparison scores
+(:mod:`.noise`). Rounds stop (``stopped_by``):
+
+* ``"target_noise"``: the noise (the largest channel's) is at most
+  ``settings.target_noise``;
+* ``"budget"``: the starting budget is spent and the target is out of reach within
+  ``settings.reference_time_cap``: noise falls as 1 / sqrt(photons), so the target
+  needs photons x (noise / target)^2 per seed, and at the last round's rate those
+  would end past the cap (or the noise is not finite);
+* ``"time_cap"``: past the budget, the cap is reached (or the target turned out of
+  reach within it) before the target.
+
+Camera image: K seeds of ``settings.spp`` samples per
 pixel, mean and variance of the mean; by the camera tracer (:mod:`.camera_trace`:
 camera rays through the counted specular chains, shaded with direct light and the
 caustic irradiance of its own per-seed lookup maps) or, with ``camera="ptracer"``,
@@ -39,14 +53,18 @@ from renderers.mitsuba.camera import (
     camera_max_depth,
     render_camera,
 )
+from renderers.mitsuba.camera import MAX_SPECULAR_EVENTS as CAMERA_MAX_EVENTS
 from renderers.mitsuba.camera_lookup import FOOTPRINT_PERCENTILE, LOOKUP_CAP, LookupPlan
 from renderers.mitsuba.camera_trace import camera_trace_limits, render_traced_camera
-from renderers.mitsuba.noise import caustic_region, relative_noise, seed_statistics
+from renderers.mitsuba.noise import caustic_region, relative_noise_per_channel, seed_statistics
 from renderers.mitsuba.photons import (
     DEFAULT_BATCH,
     MAX_SPECULAR_EVENTS,
+    ROULETTE_FROM,
+    ROULETTE_SURVIVAL,
     PhotonTracer,
     event_chains_counted,
+    launch_plan,
 )
 from renderers.results import ReceiverMap, RenderResult
 from scenes import effects_of
@@ -61,6 +79,7 @@ __all__ = [
     "estimate_receivers",
     "reference_metadata",
     "render_reference",
+    "stop_reason",
 ]
 
 TIMER = "time.perf_counter (wall clock, includes JIT compilation)"
@@ -83,11 +102,13 @@ class ReceiverEstimate:
         Mean caustic irradiance (the counted chains only, no direct light: what the
         radiometric contract calls the receiver map), with its variance of the mean.
     photons : int
-        Photons per seed (per channel pass) actually traced.
+        Photons per seed (per channel pass) actually traced: the starting budget, and
+        the launches past it.
     relative_noise : float
-        Largest RMS relative standard error over the receivers' caustic regions.
+        Largest, over the receivers and RGB channels, RMS relative standard error
+        over the receivers' caustic regions (:mod:`.noise`).
     stopped_by : str
-        ``"target_noise"`` or ``"budget"``.
+        ``"target_noise"``, ``"budget"`` or ``"time_cap"`` (see the module docstring).
     history : tuple of (int, float, float)
         (photons per seed, relative noise, seconds) after each round.
     seeds : int
@@ -98,8 +119,17 @@ class ReceiverEstimate:
         Photon-tracer passes per seed: 1, or 3 with dispersion (one per channel).
     cut_fraction : float
         Largest fraction, over RGB, of the emitted flux on paths that the safety cap
-        of :data:`.photons.MAX_SPECULAR_EVENTS` stopped (all-paths mode; 0 in chain
-        mode, whose chains end by definition).
+        of :data:`.photons.MAX_SPECULAR_EVENTS` stopped (all-paths mode, past Russian
+        roulette; 0 in chain mode, whose chains end by definition).
+    relative_noise_per_channel : tuple of float
+        (R, G, B): each channel's RMS relative standard error, the largest over the
+        receivers (nan for a channel lit nowhere in the regions).
+    region_texels : tuple of int
+        Texels of each receiver's caustic region the noise was measured over.
+    budget : int
+        The starting photon budget per seed.
+    time_cap : float
+        Seconds the rounds may take past the budget (``reference_time_cap``).
     """
 
     maps: tuple[ReceiverMap, ...] | None
@@ -112,6 +142,10 @@ class ReceiverEstimate:
     seed: int
     channel_passes: int
     cut_fraction: float = 0.0
+    relative_noise_per_channel: tuple[float, float, float] = (np.nan, np.nan, np.nan)
+    region_texels: tuple[int, ...] = ()
+    budget: int = 0
+    time_cap: float = np.inf
 
 
 #: Cut flux fraction above which the reference warns that its path limit loses light.
@@ -124,10 +158,10 @@ def cut_fraction(emitted: np.ndarray, cut: np.ndarray) -> float:
     return float(fractions.max())
 
 
-def _warn_cut(scene: Scene, fraction: float, what: str) -> None:
-    """CutFluxWarning naming the scene when the cap cut more than CUT_WARNING."""
+def _warn_cut(scene: Scene, fraction: float, what: str, cap: int) -> None:
+    """CutFluxWarning naming the scene when the ``cap`` cut more than CUT_WARNING."""
     if fraction > CUT_WARNING:
-        warnings.warn(f"{scene.name}: the safety cap of {MAX_SPECULAR_EVENTS} specular events "
+        warnings.warn(f"{scene.name}: the safety cap of {cap} specular events "
                       f"cut off {fraction:.2e} of the {what} "
                       "(paths trapped by total internal reflection)", CutFluxWarning,
                       stacklevel=3)
@@ -140,14 +174,40 @@ def _progress(total: int, desc: str, enabled: bool):
     return tqdm(total=total, desc=desc, unit="photon", unit_scale=True, leave=False)
 
 
+def stop_reason(*, noise: float, target: float, phase: str, elapsed: float, rate: float,
+                traced: int, cap: float) -> str | None:
+    """Why the rounds stop after this one (``stopped_by``), or None to trace another.
+
+    ``phase``: ``"budget"`` while the starting budget has launches left, ``"spent"``
+    right after its last, ``"extended"`` after a launch past it. ``rate``: photons per
+    seed per second over the last round; ``elapsed``: seconds since the start. The
+    target needs traced x (noise / target)^2 photons per seed (the noise of a mean
+    falls as 1 / sqrt(photons)); another round is traced only if, at ``rate``, those
+    would be done within ``cap`` seconds.
+    """
+    if np.isfinite(noise) and noise <= target:
+        return "target_noise"
+    if phase == "budget":
+        return None
+    why = "time_cap" if phase == "extended" else "budget"
+    if not (np.isfinite(noise) and rate > 0 and target > 0) or elapsed >= cap:
+        return why  # no projection (or a target of 0, never reached), or out of time
+    needed = traced * (noise / target) ** 2
+    return why if elapsed + (needed - traced) / rate > cap else None
+
+
 def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int | None = None,
                        seed: int | None = None, target_noise: float | None = None,
+                       time_cap: float | None = None,
                        resolution: tuple[int, int] | None = None, extents: list | None = None,
                        batch: int = DEFAULT_BATCH, progress: bool = False,
                        caustic_only: bool = False) -> ReceiverEstimate:
-    """Trace receiver maps with K seeds until the noise target or the budget.
+    """Trace receiver maps with K seeds until the noise target, the budget or the
+    time cap (see the module docstring).
 
-    Parameters default to ``scene.settings`` (photons = budget per seed).
+    Parameters default to ``scene.settings`` (``photons``: the starting budget per
+    seed, always traced unless the target is met first; ``time_cap``:
+    ``reference_time_cap``). ``batch``: the lanes of a whole launch.
     ``caustic_only`` traces only the caustic maps (see :class:`.PhotonTracer`:
     every photon is aimed at the caustic objects, none at the receivers; same
     expectation, less noise per photon); ``maps`` is then None.
@@ -157,21 +217,26 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
     k = seeds if seeds is not None else s.seeds
     first = seed if seed is not None else s.seed
     target = target_noise if target_noise is not None else s.target_noise
+    cap = float(time_cap if time_cap is not None else s.reference_time_cap)
     start = time.perf_counter()
     tracer = PhotonTracer(scene, resolution=resolution, extents=extents,
                           caustic_only=caustic_only)
-    per_round = max(1, min(batch, budget))
+    # One launch per seed per round: the starting budget's launches, then whole ones.
+    planned = launch_plan(budget, batch)
     n_rec = len(tracer.extents)
     sums_total = [[0.0] * n_rec for _ in range(k)]
     sums_caustic = [[0.0] * n_rec for _ in range(k)]
     traced, history, noise, stopped = 0, [], float("nan"), "budget"
+    per_channel, texels = np.full(3, np.nan), (0,) * n_rec
     emitted, cut = np.zeros(3), np.zeros(3)
+    maps, caustic = [], []
     with _progress(budget, f"photons ({k} seeds)", progress) as bar:
         stream = 0
-        while traced < budget:
-            n = min(per_round, budget - traced)
+        while True:
+            n = planned[stream] if stream < len(planned) else batch
+            round_start = time.perf_counter()
             for i in range(k):
-                sums = tracer.trace(n, seed=first + i, stream=stream, batch=per_round)
+                sums = tracer.trace(n, seed=first + i, stream=stream, batch=n)
                 for r in range(n_rec):
                     if not caustic_only:
                         sums_total[i][r] = sums_total[i][r] + sums.total[r]
@@ -180,41 +245,71 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
             emitted += sums.emitted
             cut += sums.cut
             stream += 1
-            noises, maps, caustic = [], [], []
+            channels, maps, caustic, counts = [], [], [], []
             for r in range(n_rec):
                 cmean, cvar = seed_statistics(np.stack([c[r] for c in sums_caustic]) / traced)
-                # Noise of what is compared: the caustic map, over its caustic region.
-                noises.append(relative_noise(cmean, cvar, caustic_region(cmean)))
+                # Noise of what is compared: the caustic map, per channel, over the
+                # region the comparison scores.
+                region = caustic_region(cmean)
+                counts.append(int(region.sum()))
+                channels.append(relative_noise_per_channel(cmean, cvar, region))
                 if not caustic_only:
                     mean, var = seed_statistics(np.stack([t[r] for t in sums_total]) / traced)
                     maps.append(ReceiverMap(mean.astype(np.float32), tracer.extents[r],
                                             var.astype(np.float32)))
                 caustic.append(ReceiverMap(cmean.astype(np.float32), tracer.extents[r],
                                            cvar.astype(np.float32)))
-            finite = [x for x in noises if np.isfinite(x)]
-            noise = max(finite) if finite else float("nan")
-            history.append((traced, noise, time.perf_counter() - start))
+            per_channel, texels = _largest(channels), tuple(counts)
+            finite = per_channel[np.isfinite(per_channel)]
+            noise = float(finite.max()) if finite.size else float("nan")
+            now = time.perf_counter()
+            history.append((traced, noise, now - start))
             if bar is not None:
+                bar.total = max(bar.total, traced)
                 bar.update(sums.photons)
                 bar.set_postfix(noise=f"{noise:.4f}")
-            if np.isfinite(noise) and noise <= target:
-                stopped = "target_noise"
+            phase = ("budget" if stream < len(planned)
+                     else "spent" if stream == len(planned) else "extended")
+            why = stop_reason(noise=noise, target=target, phase=phase, elapsed=now - start,
+                              rate=sums.photons / max(now - round_start, 1e-9),
+                              traced=traced, cap=cap)
+            if why is not None:
+                stopped = why
                 break
     cut = cut_fraction(emitted, cut)
-    _warn_cut(scene, cut, "emitted caustic flux")
+    _warn_cut(scene, cut, "emitted caustic flux", tracer.max_events)
     return ReceiverEstimate(maps=None if caustic_only else tuple(maps), caustic=tuple(caustic),
                             photons=traced, relative_noise=noise, stopped_by=stopped,
                             history=tuple(history), seeds=k, seed=first,
                             channel_passes=len(tracer.channels),
-                            cut_fraction=cut)
+                            cut_fraction=cut,
+                            relative_noise_per_channel=tuple(float(x) for x in per_channel),
+                            region_texels=texels, budget=int(budget), time_cap=cap)
+
+
+def _largest(channels: list[np.ndarray]) -> np.ndarray:
+    """(3,) per channel, the largest finite noise over the receivers (nan if none)."""
+    stacked = np.stack(channels)
+    out = np.full(3, np.nan)
+    for c in range(3):
+        finite = stacked[:, c][np.isfinite(stacked[:, c])]
+        if finite.size:
+            out[c] = finite.max()
+    return out
 
 
 def reference_metadata(scene: Scene, *, key: str, versions: dict, photons: int,
                        channel_passes: int, relative_noise: float, stopped_by: str,
                        history, cut_fraction: float, camera_cut: float,
-                       camera_variance: np.ndarray, lookup: LookupPlan | None = None) -> dict:
+                       camera_variance: np.ndarray, lookup: LookupPlan | None = None,
+                       relative_noise_per_channel=None,
+                       region_texels: tuple[int, ...] | None = None) -> dict:
     """A reference's ``metadata`` (``result.json``): what was traced and how, with
-    ``hash`` = ``key``. ``history`` holds (photons, noise, seconds) per round.
+    ``hash`` = ``key``. ``history`` holds (photons, noise, seconds) per round;
+    ``photons`` the photons per seed traced, ``photon_budget`` the starting budget.
+    ``relative_noise`` is the largest channel's; ``relative_noise_per_channel``
+    (R, G, B) and ``region_texels`` (texels of each receiver's caustic region) are
+    recorded when given (None: not measured by the caller).
 
     The camera image is ptracer's unless ``lookup`` (the camera tracer's lookup maps)
     is given. ``camera_cut``: ptracer, :func:`.camera.camera_cut_fraction`'s share of
@@ -253,12 +348,19 @@ def reference_metadata(scene: Scene, *, key: str, versions: dict, photons: int,
         "seed": s.seed,
         "seeds": s.seeds,
         "relative_noise": relative_noise,
+        "relative_noise_per_channel": (None if relative_noise_per_channel is None
+                                       else [float(x) for x in relative_noise_per_channel]),
+        "noise_region_texels": None if region_texels is None else list(region_texels),
         "target_noise": s.target_noise,
+        "reference_time_cap": s.reference_time_cap,
         "stopped_by": stopped_by,
         "noise_history": [list(h) for h in history],
         "event_chains": event_chains_counted(scene),
         "cut_flux_fraction": cut_fraction,
         "max_specular_events": MAX_SPECULAR_EVENTS,
+        # All-paths mode: Russian roulette past this many events, survival probability.
+        "roulette_from": ROULETTE_FROM,
+        "roulette_survival": ROULETTE_SURVIVAL,
         "camera_max_depth": camera_max_depth(scene),
         # ptracer: share of the camera image's light on paths past the cap, measured by
         # one seed rendered again with twice the cap (camera.camera_cut_fraction); the
@@ -311,12 +413,14 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict,
     else:
         image, camera_var, camera_cut = _ptracer_camera(scene, geometry, progress=progress,
                                                         timings=timings)
-    _warn_cut(scene, camera_cut, "camera image")
+    _warn_cut(scene, camera_cut, "camera image", CAMERA_MAX_EVENTS)
     metadata = reference_metadata(
         scene, key=key, versions=versions, photons=est.photons,
         channel_passes=est.channel_passes, relative_noise=est.relative_noise,
         stopped_by=est.stopped_by, history=est.history, cut_fraction=est.cut_fraction,
-        camera_cut=camera_cut, camera_variance=camera_var, lookup=lookup)
+        camera_cut=camera_cut, camera_variance=camera_var, lookup=lookup,
+        relative_noise_per_channel=est.relative_noise_per_channel,
+        region_texels=est.region_texels)
     return RenderResult(
         renderer="mitsuba", camera=image.astype(np.float32), receivers=tuple(est.caustic),
         effects=effects_of(scene), timings=timings, timer=TIMER, metadata=metadata,
