@@ -53,6 +53,8 @@ from reports.records import (
     CHECK_KIND_MEANING,
     CHECK_KINDS,
     METRIC_FORMULAS,
+    EqualErrorSpeedup,
+    MetricValue,
     SceneComparison,
     SceneFailure,
     Table,
@@ -61,8 +63,9 @@ from reports.temporal import temporal_index, temporal_script, temporal_section
 from scenes.effects import EFFECTS
 from scenes.files import atomic_write_bytes, jsonable
 
-__all__ = ["DEFAULT_PREVIEW_SIZE", "FLUX_RATIO_RANGE", "KEY_METRICS", "build_report",
-           "scene_folder", "write_index", "write_page"]
+__all__ = ["DEFAULT_PREVIEW_SIZE", "FLUX_RATIO_RANGE", "KEY_METRICS", "SOFTWARE_GL",
+           "build_report", "hardware", "scene_folder", "speedup_text", "write_index",
+           "write_page"]
 
 #: Largest side (pixels) of a preview; larger images are box-filtered down by an
 #: integer factor, and the page says so.
@@ -125,6 +128,111 @@ def _number(value: Any) -> str:
     return str(value)
 
 
+#: GL renderers that rasterise in software on the CPU (lower case, matched in the
+#: renderer string): with one of these no GPU rendered the method.
+SOFTWARE_GL = ("llvmpipe", "softpipe", "swrast", "swiftshader", "lavapipe",
+               "software rasterizer")
+
+
+def speedup_text(speedup: EqualErrorSpeedup | None) -> str:
+    """An equal-error speedup as the report shows it: ``12.3× (95 % interval 8.1×–19×)``,
+    ``at least 40×`` (the method is not measurably off the truth: no upper end),
+    ``at most 2×`` (the reference's cheapest budget is already as accurate), or the
+    bare estimate where no interval was computed (or it has no width); ``—`` for None."""
+    if speedup is None:
+        return "—"
+    value = f"{_number(speedup.speedup)}×"
+    if speedup.bound_kind == "lower bound":
+        return f"at least {value} (95 % confidence)"
+    if speedup.bound_kind == "upper bound":
+        return f"at most {value}"
+    low, high = float(speedup.low), float(speedup.high)
+    # An interval of zero width (no uncertainty was propagated) says nothing: omitted.
+    if math.isfinite(low) and math.isfinite(high) and low < high:
+        return f"{value} (95 % interval {_number(low)}×–{_number(high)}×)"
+    if math.isfinite(low) and high == math.inf:
+        return f"{value} (95 % interval from {_number(low)}×)"
+    return value
+
+
+def hardware(comparison: SceneComparison) -> dict[str, Any]:
+    """Where a comparison's times were measured: the method's GL renderer and the GPU
+    it names (None for a software rasteriser, :data:`SOFTWARE_GL`, or none recorded),
+    the machine's CPU count and processor, the reference's Mitsuba variant and the
+    device it runs on (``cuda_*``: a GPU), and all of it as one ``text``."""
+    prov = comparison.provenance
+    gl = prov.method.gl_renderer
+    machine = prov.machine or {}
+    cpus, processor = machine.get("cpus"), machine.get("processor") or None
+    software = gl is not None and any(name in gl.lower() for name in SOFTWARE_GL)
+    # A hardware renderer string is "<GPU>/<bus>/<instruction set>" (NVIDIA) or the
+    # GPU's name: its first part names the GPU.
+    gpu = gl.split("/", 1)[0].strip() if gl and not software else None
+    variant = prov.reference.get("variant") or (prov.reference.get("versions") or {}).get(
+        "variant")
+    device = None if not variant else ("a GPU (CUDA)" if str(variant).startswith("cuda")
+                                       else "the CPU")
+    if gl is None:
+        method = "GL renderer not recorded"
+    elif software:
+        method = f"GL renderer {gl} (software rasterisation on the CPU, no GPU)"
+    else:
+        method = f"GL renderer {gl} (GPU: {gpu})"
+    cpu = (f"{cpus} CPUs" if cpus else "CPU count not recorded") + (
+        f", processor {processor}" if processor else ", processor not recorded")
+    reference = (f"reference: Mitsuba {variant} on {device}" if variant
+                 else "reference: Mitsuba variant not recorded")
+    return {"gl_renderer": gl, "gpu": gpu, "cpus": cpus, "processor": processor,
+            "variant": variant, "reference_device": device,
+            "text": f"Measured on: method {method}; {cpu}; {reference}."}
+
+
+def _speedup_missing(comparison: SceneComparison) -> tuple[str, str] | None:
+    """Why the index shows no speedup, as (a few words, the full reason); None when it
+    shows one."""
+    if comparison.speedup is not None:
+        return None
+    withheld = comparison.speedup_withheld
+    if withheld is not None:
+        return f"withheld: {withheld.short or 'see its page'}", f"Withheld: {withheld.reason}"
+    if comparison.section("cost") is None:
+        return "cost study not run", ("The cost-versus-accuracy study did not run for this "
+                                      "comparison, so no equal-error speedup was computed.")
+    return "not computed", ("The cost study ran but gave no equal-error speedup (see the "
+                            "page's cost section).")
+
+
+def _metric_cell(comparison: SceneComparison, view: str, region: str,
+                 metric: str) -> dict[str, Any]:
+    """One metric cell of the index: the value, or why there is none, and why its noise
+    floor or excess (the method's own error) is missing where they are."""
+    try:
+        mv: MetricValue | None = comparison.metric(view, region, metric)
+    except KeyError:
+        mv = None
+    cell: dict[str, Any] = {"mv": mv, "why": None, "floor_why": None, "excess_why": None}
+    if mv is None:
+        if not any(key.startswith(f"{view}/") for key in comparison.images):
+            notes = [n for n in comparison.provenance.notes if n.startswith(view)]
+            cell["why"] = (f"no {view}", notes[0] if notes else
+                           f"This comparison has no {view} view.")
+        else:
+            cell["why"] = ("not computed", f"{metric} is not computed over the region "
+                           f"{region} of {view} in this comparison.")
+        return cell
+    if mv.noise_floor is None:
+        cell["floor_why"] = ("no noise floor", "No independent reference was scored "
+                             "against the reference.")
+    if mv.excess is None:
+        cell["excess_why"] = (
+            ("no variance", f"The reference records no per-pixel variance for {view}, "
+             "so the method's own error is not estimated.")
+            if f"{view}/reference_variance" not in comparison.images
+            else ("not estimated", f"The comparison carries no estimate of the method's "
+                  f"own {metric} error."))
+    return cell
+
+
 @cache
 def page_environment() -> jinja2.Environment:
     env = jinja2.Environment(
@@ -136,6 +244,7 @@ def page_environment() -> jinja2.Environment:
         lstrip_blocks=True,
     )
     env.filters["num"] = _number
+    env.filters["speedup"] = speedup_text
     env.globals["effect_notes"] = EFFECTS
     env.tests["mapping"] = lambda value: isinstance(value, dict)
     env.tests["sequence_value"] = lambda value: isinstance(value, (list, tuple))
@@ -316,6 +425,7 @@ def _build_scene(comparison: SceneComparison, folder: Path, *, self_contained: b
         "temporal": temporal,
         "temporal_inline": temporal_inline,
         "decomposition": decomposition_section(comparison, assets),
+        "hardware": hardware(comparison),
         **_page_context(self_contained, hdr_inline, *data_inline,
                         *filter(None, [temporal_inline])),
     }
@@ -351,13 +461,10 @@ def write_page(out_dir: Path, item: SceneComparison | SceneFailure, *, folder: s
         return {"c": item, "failure": True, "folder": folder, "href": href}
     _build_scene(item, out_dir / folder, self_contained=self_contained,
                  preview_size=preview_size)
-    metrics = []
-    for view, region, metric in KEY_METRICS:
-        try:
-            metrics.append(item.metric(view, region, metric))
-        except KeyError:
-            metrics.append(None)
-    return {"c": item, "failure": False, "folder": folder, "href": href, "metrics": metrics,
+    cells = [_metric_cell(item, *key) for key in KEY_METRICS]
+    return {"c": item, "failure": False, "folder": folder, "href": href,
+            "metrics": [cell["mv"] for cell in cells], "cells": cells,
+            "speedup_why": _speedup_missing(item), "hardware": hardware(item),
             "checks": _checks_summary(item),
             "thumbnails": thumbnails(item, folder, out_dir, self_contained)}
 

@@ -9,16 +9,38 @@ real-time image and the reference go through exactly the same curve:
 
 a Reinhard curve with white point ``white`` (W m⁻² sr⁻¹ or W/m²), followed by the
 sRGB transfer function. Output is in [0, 1], so SSIM's ``data_range`` is 1.
+
+The difference maps' scale is fixed per scene from the reference alone too
+(:func:`difference_range`): ± :data:`DIFF_RANGE_FRACTION` of the reference's
+:data:`DIFF_RANGE_PERCENTILE` th-percentile luminance, so every method of a scene is
+drawn on one scale, known before any method has rendered. False colour marks what
+falls outside its scale (:data:`CLIP_ABOVE`, :data:`CLIP_BELOW`) and what is not a
+number (:data:`UNDEFINED`) instead of folding it into the ends.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["false_colour", "luminance", "srgb_encode", "tonemap", "white_point"]
+__all__ = ["CLIP_ABOVE", "CLIP_BELOW", "DIFF_RANGE_FRACTION", "DIFF_RANGE_PERCENTILE",
+           "DIFF_RANGE_RULE", "UNDEFINED", "difference_range", "false_colour", "luminance",
+           "srgb_encode", "tonemap", "white_point"]
 
 #: Rec. 709 luma weights for linear RGB.
 LUMA = np.array([0.2126, 0.7152, 0.0722])
+#: The difference scale is ± this fraction of the reference's robust maximum luminance.
+DIFF_RANGE_FRACTION = 0.25
+#: The reference's robust maximum: this percentile of its luminance (the top 0.5 % of
+#: pixels, a caustic's hottest texels and fireflies, do not set the scale).
+DIFF_RANGE_PERCENTILE = 99.5
+#: The rule, as the report states it.
+DIFF_RANGE_RULE = (f"{100 * DIFF_RANGE_FRACTION:g} % of the reference's "
+                   f"{DIFF_RANGE_PERCENTILE:g}th-percentile luminance")
+#: sRGB bytes of values above a false-colour scale (magenta), below it (green) and not
+#: a number (mid grey): none is a colour of the diverging or sequential maps used.
+CLIP_ABOVE = (255, 0, 255)
+CLIP_BELOW = (0, 200, 0)
+UNDEFINED = (128, 128, 128)
 
 
 def luminance(image: np.ndarray) -> np.ndarray:
@@ -40,6 +62,16 @@ def white_point(reference: np.ndarray, *, mask: np.ndarray | None = None,
     return white if white > 0 else 1.0
 
 
+def difference_range(reference: np.ndarray, *, mask: np.ndarray | None = None) -> float:
+    """The symmetric limit of a scene's difference maps (same units as ``reference``):
+    :data:`DIFF_RANGE_FRACTION` × the reference's :data:`DIFF_RANGE_PERCENTILE` th-
+    percentile luminance inside ``mask`` (:func:`white_point`; an all-black reference
+    gives 0.25, so the colour bar stays defined). A function of the reference alone,
+    so every method of a scene gets the same scale."""
+    return DIFF_RANGE_FRACTION * white_point(reference, mask=mask,
+                                             percentile=DIFF_RANGE_PERCENTILE)
+
+
 def srgb_encode(linear: np.ndarray) -> np.ndarray:
     """The sRGB transfer function (IEC 61966-2-1) on values in [0, 1]."""
     x = np.clip(linear, 0.0, 1.0)
@@ -55,12 +87,15 @@ def tonemap(image: np.ndarray, *, white: float) -> np.ndarray:
 
 
 def false_colour(values: np.ndarray, *, vmin: float, vmax: float,
-                 colormap: str = "RdBu_r") -> np.ndarray:
+                 colormap: str = "RdBu_r", mark_clipped: bool = False) -> np.ndarray:
     """Map a scalar image (H, W) to uint8 RGB (H, W, 3) with a matplotlib colormap.
 
     Use a diverging map (``RdBu_r``, symmetric ``vmin = -vmax``) for signed
     differences and a sequential one (``magma``) for absolute ones; the same
-    ``vmin``/``vmax`` must label the colour bar drawn beside it.
+    ``vmin``/``vmax`` must label the colour bar drawn beside it. Without
+    ``mark_clipped`` values beyond the scale take its end colours and NaN the colour
+    of 0; with it they are drawn in :data:`CLIP_ABOVE` (> ``vmax``),
+    :data:`CLIP_BELOW` (< ``vmin``) and :data:`UNDEFINED` (NaN).
     """
     from matplotlib import colormaps  # noqa: PLC0415 - heavy, only when false colour is drawn
 
@@ -68,4 +103,10 @@ def false_colour(values: np.ndarray, *, vmin: float, vmax: float,
         raise ValueError(f"need vmax > vmin, got [{vmin}, {vmax}]")
     scaled = (np.nan_to_num(np.asarray(values, np.float64)) - vmin) / (vmax - vmin)
     rgba = colormaps[colormap](np.clip(scaled, 0.0, 1.0))
-    return (rgba[..., :3] * 255 + 0.5).astype(np.uint8)
+    rgb = (rgba[..., :3] * 255 + 0.5).astype(np.uint8)
+    if mark_clipped:
+        raw = np.asarray(values, np.float64)
+        rgb[raw > vmax] = CLIP_ABOVE
+        rgb[raw < vmin] = CLIP_BELOW
+        rgb[np.isnan(raw)] = UNDEFINED
+    return rgb

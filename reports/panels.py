@@ -11,6 +11,18 @@ scene's reference shared by its method pages (see :mod:`reports.page_data`). A
 preview box-filtered down by ``f`` holds box means: of the values, and for the
 standard error ``sqrt(mean(Var) / f²)``, the standard error of a mean of f²
 independent pixels.
+
+Beside each difference map (method − reference, luminance, on the scene's scale
+``exposure["diff_range"]``, :func:`reports.display.difference_range`: values beyond it
+marked, their share stated) stand, where the record carries the reference's variance:
+
+* the reference's standard error ``σ = Σ_c w_c sqrt(Var_c)`` (luminance, Rec. 709
+  weights ``w``; the upper bound the probe and the profiles use, exact for perfectly
+  correlated channels), on 0 .. its 99.5th percentile;
+* the z-score ``z = (L_method − L_reference) / σ``, clipped at ±:data:`Z_LIMIT`, with
+  the share of texels (full resolution) where ``|z| > 3``. With σ an upper bound,
+  ``|z|`` is a lower bound of the texel's z-score whatever the channels' correlation.
+  For a perfect method with Gaussian noise ``P(|z| > 3) = 0.27 %`` at most.
 """
 
 from __future__ import annotations
@@ -26,15 +38,34 @@ from urllib.parse import quote
 import numpy as np
 
 from reports import images, profiles
-from reports.display import luminance, white_point
+from reports.display import (
+    CLIP_ABOVE,
+    CLIP_BELOW,
+    DIFF_RANGE_RULE,
+    LUMA,
+    UNDEFINED,
+    difference_range,
+    false_colour,
+    luminance,
+    white_point,
+)
 from reports.page_data import view_data
 from reports.records import SceneComparison
 from scenes.files import atomic_write_bytes
 
-__all__ = ["THUMBNAIL_SIZE", "Assets", "hdr_script", "per_view", "thumbnails", "view_panels",
-           "views"]
+__all__ = ["MAP_COLORMAPS", "THUMBNAIL_SIZE", "Z_LIMIT", "Z_REPORTED", "Assets", "hdr_script",
+           "per_view", "thumbnails", "uncertainty_maps", "view_panels", "views"]
 
 THUMBNAIL_SIZE = 128
+#: The z-score map's colour bar spans ±Z_LIMIT; beyond it texels are marked.
+Z_LIMIT = 5.0
+#: The page states the share of texels with |z| above this.
+Z_REPORTED = 3.0
+#: Colormaps of the false-colour maps: diverging for signed quantities (difference,
+#: z-score), sequential for the rest.
+MAP_COLORMAPS = {**images.COLORMAPS, "se": "cividis", "z": "coolwarm"}
+#: Percentile of the standard-error map's luminance at the top of its colour bar.
+SE_PERCENTILE = 99.5
 _VIEW = re.compile(r"^(camera|receiver\d+)$")
 
 
@@ -114,15 +145,21 @@ def view_panels(comparison: SceneComparison, view: str, assets: Assets,
     if "signed" in shown:
         limit = per_view(comparison.exposure.get("diff_range"), view)
         if not _positive(limit):
-            lum = np.abs(luminance(shown["signed"]))
-            lum = lum[np.isfinite(lum)]
-            limit = float(np.percentile(lum, 99)) if lum.size else 0.0
-            # The colour bar needs a positive range, whatever the data (all NaN, all 0).
-            limit = limit if _positive(limit) else 1.0
+            # The scene's rule, from the reference alone (every method gets the same).
+            limit = difference_range(raw["reference"]) if "reference" in raw else 1.0
+        limit = float(limit)
+        signed = luminance(raw["signed"])
+        finite = np.isfinite(signed)
+        clipped = int(np.count_nonzero(np.abs(signed[finite]) > limit))
         panel["maps"].append(_map_panel(
-            assets, view, "signed", shown["signed"], vmin=-float(limit), vmax=float(limit),
+            assets, view, "signed", luminance(shown["signed"]), vmin=-limit, vmax=limit,
             title="Difference (method − reference)",
-            label="luminance of method − reference, " + panel["units"]))
+            label="luminance of method − reference, " + panel["units"],
+            clip={"count": clipped, "total": int(finite.sum()), "what": "pixels"},
+            note=f"The scene's scale, the same for every method: ±{DIFF_RANGE_RULE}."))
+        if method is not None and reference is not None:
+            panel["maps"] += uncertainty_maps(assets, view, raw, shown, factor=factor,
+                                              units=panel["units"])
     if "ssim" in shown:
         panel["maps"].append(_map_panel(assets, view, "ssim", shown["ssim"], vmin=0.0,
                                         vmax=1.0, title="SSIM map",
@@ -139,15 +176,107 @@ def view_panels(comparison: SceneComparison, view: str, assets: Assets,
     return panel
 
 
+def _standard_error(variance: np.ndarray, factor: int = 1) -> np.ndarray:
+    """Per-channel standard error ``sqrt(Var / f²)`` of a (box mean of) ``Var[mean]``
+    (negative or NaN variances, which no estimator should give, count as 0)."""
+    variance = np.maximum(np.nan_to_num(np.asarray(variance, np.float64)), 0.0)
+    return np.sqrt(variance / factor**2)
+
+
+def _z_score(signed: np.ndarray, se: np.ndarray) -> np.ndarray:
+    """``z = L(signed) / Σ_c w_c σ_c`` per pixel, NaN where the standard error is 0."""
+    se_lum = se @ LUMA if se.ndim == 3 else se
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(se_lum > 0, luminance(signed) / np.where(se_lum > 0, se_lum, 1.0),
+                        np.nan)
+
+
+def uncertainty_maps(assets: Assets, view: str, raw: dict[str, np.ndarray],
+                     shown: dict[str, np.ndarray], *, factor: int,
+                     units: str) -> list[dict[str, Any]]:
+    """The reference's standard-error map and the z-score map of one view (module
+    docstring), or one ``missing`` entry saying why there are none.
+
+    Parameters
+    ----------
+    raw, shown : dict of str to ndarray
+        The view's layers at full resolution and as shown (box means, ``factor``):
+        ``signed`` (method − reference, (H, W, 3)) and ``reference_variance`` (the
+        variance of the reference's mean per pixel and channel, (H, W, 3), units²).
+    """
+    if "reference_variance" not in raw or "signed" not in raw:
+        return [{"kind": "uncertainty", "missing": (
+            "No standard-error or z-score map: the reference records no per-pixel "
+            "variance for this view.")}]
+    se = _standard_error(shown["reference_variance"], factor) @ LUMA
+    finite = se[np.isfinite(se)]
+    top = float(np.percentile(finite, SE_PERCENTILE)) if finite.size else 0.0
+    top = top if _positive(top) else 1.0
+    se_map = _map_panel(
+        assets, view, "se", se, vmin=0.0, vmax=top, title="Reference standard error",
+        label="σ of the reference's luminance, " + units,
+        clip={"what": "pixels"},
+        note=f"σ = Σ w_c sqrt(Var_c) (Rec. 709 weights), the standard error of the "
+             f"reference's mean; the bar ends at its {SE_PERCENTILE:g}th percentile.")
+    # The share is a property of the comparison: counted at full resolution.
+    z_full = _z_score(np.asarray(raw["signed"], np.float64),
+                      _standard_error(raw["reference_variance"]))
+    defined = np.isfinite(z_full)
+    beyond = int(np.count_nonzero(np.abs(z_full[defined]) > Z_REPORTED))
+    total = int(defined.sum())
+    share = beyond / total if total else float("nan")
+    undefined = int(z_full.size - total)
+    z_map = _map_panel(
+        assets, view, "z", _z_score(np.asarray(shown["signed"], np.float64),
+                                    _standard_error(shown["reference_variance"], factor)),
+        vmin=-Z_LIMIT, vmax=Z_LIMIT, title="z-score (method − reference) / σ",
+        label="z of the luminance, dimensionless", clip={"what": "pixels"},
+        note=("|z| > 3 at {share} of the {total} pixels with a standard error (a perfect "
+              "method with Gaussian reference noise: at most 0.27 %){rest}.").format(
+            share=_percent(share), total=total,
+            rest=f"; {undefined} pixel(s) without one, in grey" if undefined else ""))
+    z_map["z_share"] = share
+    z_map["z_count"] = beyond
+    z_map["z_total"] = total
+    return [se_map, z_map]
+
+
+def _percent(share: float) -> str:
+    """A share as a percentage, 3 significant digits ('n/a' when undefined)."""
+    return "n/a" if not math.isfinite(share) else f"{100 * share:.3g} %"
+
+
 def _map_panel(assets: Assets, view: str, kind: str, values: np.ndarray, *, vmin: float,
-               vmax: float, title: str, label: str) -> dict[str, Any]:
-    return {
+               vmax: float, title: str, label: str, clip: dict[str, Any] | None = None,
+               note: str = "") -> dict[str, Any]:
+    """One false-colour map (a (H, W, 3) input as its luminance) and its colour bar.
+
+    With ``clip``, values beyond [vmin, vmax] are drawn in the marker colours
+    (:data:`reports.display.CLIP_ABOVE`, ``CLIP_BELOW``; NaN in ``UNDEFINED``) and,
+    when ``clip`` holds ``count`` and ``total``, the page states their share.
+    """
+    scalar = luminance(values) if np.ndim(values) == 3 else np.asarray(values, np.float64)
+    colormap = MAP_COLORMAPS[kind]
+    marked = clip is not None
+    ramp = np.linspace(vmin, vmax, 256)[None, :].repeat(12, axis=0)
+    panel = {
         "kind": kind, "title": title, "label": label, "vmin": vmin, "vmax": vmax,
-        "src": assets.add(f"{view}_{kind}.png",
-                          images.false_colour_png(values, kind=kind, vmin=vmin, vmax=vmax)),
-        "bar": assets.add(f"colourbar_{kind}_{view}.png",
-                          images.colour_bar_png(kind=kind, vmin=vmin, vmax=vmax)),
+        "note": note, "clip": None, "missing": None,
+        "src": assets.add(f"{view}_{kind}.png", images.encode_png(false_colour(
+            scalar, vmin=vmin, vmax=vmax, colormap=colormap, mark_clipped=marked))),
+        "bar": assets.add(f"colourbar_{kind}_{view}.png", images.encode_png(false_colour(
+            ramp, vmin=vmin, vmax=vmax, colormap=colormap))),
     }
+    if marked:
+        share = (clip["count"] / clip["total"] if clip.get("total") else float("nan")) \
+            if "count" in clip else None
+        panel["clip"] = {
+            "above": "rgb({}, {}, {})".format(*CLIP_ABOVE),
+            "below": "rgb({}, {}, {})".format(*CLIP_BELOW) if vmin < 0 else None,
+            "undefined": "rgb({}, {}, {})".format(*UNDEFINED),
+            "share": share, "share_text": None if share is None else _percent(share),
+            "count": clip.get("count"), "total": clip.get("total"), "what": clip["what"]}
+    return panel
 
 
 def _default_profile(assets: Assets, view: str, raw: dict[str, np.ndarray], *, factor: int,

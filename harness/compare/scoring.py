@@ -29,13 +29,14 @@ from harness.compare.evaluate import exposure_for, score_view
 from harness.compare.regions import caustic_region, object_mask, object_region
 from harness.compare.timed import TimedRender
 from renderers.results import RenderResult
-from reports.display import luminance
+from reports.display import difference_range, luminance
 from reports.records import FluxBudgets, MetricValue
 from scenes import Scene, effects_of
 from scenes.errors import HarnessError
 from scenes.geometry import SceneGeometry
 
-__all__ = ["NoCausticError", "References", "Scored", "camera_is_blind", "relative_noise",
+__all__ = ["NoCausticError", "References", "Scored", "camera_is_blind", "channel_correlation",
+           "relative_noise",
            "require_caustic", "score_render", "scored_caustic", "views_of"]
 
 
@@ -110,6 +111,13 @@ class Scored:
     budgets: FluxBudgets
     notes: tuple[str, ...] = field(default_factory=tuple)
     reference_noise: dict = field(default_factory=dict)
+
+
+def channel_correlation(scene: Scene) -> float:
+    """The correlation of a reference texel's channel noises: 1 when the same photons
+    carry all three channels (white or absorbed light), 0 when the reference traces one
+    pass per channel (dispersion)."""
+    return 0.0 if "dispersion" in effects_of(scene) else 1.0
 
 
 def require_caustic(reference: RenderResult, *, comparison=None) -> None:
@@ -205,11 +213,10 @@ def _score_views(views: list[View], *, seeds: int | None, channel_correlation: f
         exposure["white"][view.name] = expo.white
         exposure["flip_start"][view.name] = expo.flip_start
         exposure["flip_stop"][view.name] = expo.flip_stop
-        signed = np.abs(maps[f"{view.name}/signed"])
-        signed = signed[np.isfinite(signed)]
-        limit = float(np.percentile(signed, 99.5)) if signed.size else 0.0
-        # A colour bar needs a positive range: no difference (or none finite) gets 1.
-        exposure["diff_range"][view.name] = limit if limit > 0 else 1.0
+        # One difference scale per scene, from the reference alone (so known before
+        # the first method's page is written): ±25 % of its 99.5th-percentile luminance.
+        exposure["diff_range"][view.name] = difference_range(view.reference,
+                                                             mask=view.exposure_mask)
         for kind in ("method", "reference", "signed", "ssim", "flip"):
             files[f"{view.name}/{kind}"] = f"{view.name}_{kind}.exr"
     return tuple(metrics), images, exposure, files
@@ -233,10 +240,9 @@ def score_render(scene: Scene, geometry: SceneGeometry, render: TimedRender,
     result = render.result
     views, notes = views_of(scene, geometry, result, references)
     seeds = references.reference.metadata.get("seeds")
-    # One photon carries all three channels, except where each channel is traced alone.
-    rho = 0.0 if "dispersion" in effects_of(scene) else 1.0
     metrics, images, exposure, files = _score_views(
-        views, seeds=int(seeds) if seeds else None, channel_correlation=rho)
+        views, seeds=int(seeds) if seeds else None,
+        channel_correlation=channel_correlation(scene))
     images.update(_reference_variance(references.reference, views))
     stability = stability_summary(scene, geometry, result, hits=render.hits)
     sides = side_budgets(scene, result, stability, references.reference, hits=render.hits,

@@ -3,7 +3,9 @@
  * Hovering any panel of a view (method, reference, difference, SSIM, FLIP, regions,
  * A/B) shows, for the pixel under the pointer, the method, reference and difference
  * values per channel and their luminance, in the view's units, and the reference's
- * standard error sqrt(Var[mean]) there, read from the view's float32 data
+ * standard error sqrt(Var[mean]) there and the z-score difference / standard error
+ * (per channel, and of the luminance over the luminance's Σ w_c σ_c: the z-score map's
+ * value), read from the view's float32 data
  * (view_data.js), so they are the EXR's values to within 0.05 % (the data's
  * rounding, reports/page_data.py). A square marks the pixel on every panel of the
  * view.
@@ -21,7 +23,13 @@
     ["reference", "reference"],
     ["difference", "difference"],
     ["reference_se", "ref. std. error"],
+    ["z", "z = diff. / σ"],
   ];
+
+  /* a / b, NaN where b is not positive (no standard error: z undefined). */
+  function ratio(a, b) {
+    return b > 0 ? a / b : NaN;
+  }
 
   let tooltip = null;
 
@@ -47,6 +55,8 @@
       reference: reference.concat([report.luminance(reference)]),
       difference: difference.concat([report.luminance(difference)]),
       reference_se: se ? se.concat([report.luminanceError(se)]) : null,
+      z: se ? difference.map((d, c) => ratio(d, se[c])).concat(
+        [ratio(report.luminance(difference), report.luminanceError(se))]) : null,
       ssim: report.pixel(data, "ssim", x, y),
       flip: report.pixel(data, "flip", x, y),
     };
