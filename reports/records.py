@@ -104,6 +104,17 @@ class EqualErrorSpeedup:
     slope_stderr: float = float("nan")
     bound_kind: Literal["estimate", "lower bound", "upper bound"] = "estimate"
 
+    @property
+    def text(self) -> str:
+        """``12.3× (95 % [9.8, 15.1])``, ``at least 40×`` or ``at most 2×``."""
+        if self.bound_kind == "lower bound":
+            return f"at least {self.speedup:.3g}×"
+        if self.bound_kind == "upper bound" or self.kind == "bound":
+            return f"at most {self.speedup:.3g}×"
+        if self.low == self.low and self.high == self.high:  # not NaN
+            return f"{self.speedup:.3g}× (95 % [{self.low:.3g}, {self.high:.3g}])"
+        return f"{self.speedup:.3g}×"
+
 
 @dataclass(frozen=True)
 class SpeedupWithheld:

@@ -67,28 +67,52 @@ def _relmse(comparison: SceneComparison):
         return None
 
 
+def _column(row: dict) -> float | None:
+    """A cost row's error: its excess relMSE where the study computed one, else raw."""
+    value = row.get("excess", row["relmse"])
+    value = row["relmse"] if value is None else value
+    return float(value) if value is not None and math.isfinite(float(value)) else None
+
+
 def _curve_errors(comparison: SceneComparison) -> list[float]:
     if comparison.cost is None:
         return []
-    return [float(r["relmse"]) for r in comparison.cost.records()
-            if r["series"] == "reference" and r["relmse"] is not None
-            and math.isfinite(float(r["relmse"])) and float(r["relmse"]) > 0]
+    errors = [_column(r) for r in comparison.cost.records() if r["series"] == "reference"]
+    return [e for e in errors if e is not None and e > 0]
+
+
+def _method_error(comparison: SceneComparison, *, bound: bool) -> float:
+    """The error the speedup is computed at: the scene settings' excess relMSE in the
+    cost table (its interval's upper end for a lower bound), else the raw relMSE of
+    the speedup's point."""
+    rows = [r for r in comparison.cost.records() if r["series"] != "reference"]
+    error = None
+    if rows and "excess" in comparison.cost.columns:
+        high = rows[0].get("excess_high")
+        error = float(high) if bound and high is not None else _column(rows[0])
+    if error is None and comparison.speedup_point is not None:
+        error = comparison.speedup_point[1]
+    return math.nan if error is None else error
 
 
 def speedup_reason(error: float, measurably_off: bool | None, kind: str,
-                   curve_errors: list[float]) -> tuple[str, str] | None:
+                   curve_errors: list[float], *, bound_kind: str = "estimate",
+                   raw: float | None = None) -> tuple[str, str] | None:
     """Why the equal-error speedup at relMSE ``error`` is withheld, as (a few words,
     a sentence with the numbers), or None to show it (module docstring: the bound,
     the verdict, the curve's reach). ``measurably_off`` is the verdict on the
-    method's excess error (None: unknown, no reference variance)."""
-    if error is None or not math.isfinite(error):
-        return "relMSE not a number", "the method's relMSE is not a number"
-    if error >= RELMSE_USABLE:
-        return (f"relMSE {error:.3g} >= {RELMSE_USABLE:g}",
-                f"the method's relMSE is {error:.3g}, at or above {RELMSE_USABLE:g}: worse "
+    method's excess error (None: unknown, no reference variance); a method that is
+    not measurably off keeps its speedup only as a lower bound (``bound_kind``);
+    ``raw`` is the raw relMSE the usability bound applies to (default ``error``)."""
+    raw = error if raw is None else raw
+    if raw is not None and math.isfinite(raw) and raw >= RELMSE_USABLE:
+        return (f"relMSE {raw:.3g} >= {RELMSE_USABLE:g}",
+                f"the method's relMSE is {raw:.3g}, at or above {RELMSE_USABLE:g}: worse "
                 "than a black image (whose relMSE is below 1), so not an estimate whose "
                 "cost could be compared")
-    if measurably_off is False:
+    if error is None or not math.isfinite(error):
+        return "relMSE not a number", "the method's relMSE is not a number"
+    if measurably_off is False and bound_kind != "lower bound":
         return ("not measurably off",
                 f"the method is not measurably off the noise-free image (its excess relMSE's "
                 f"95 % interval contains 0; raw relMSE {error:.3g}): the reference's curve "
@@ -125,6 +149,15 @@ def _noise_headlines(comparison: SceneComparison) -> list[Headline]:
     return out
 
 
+def _hardware(comparison: SceneComparison) -> str:
+    """Where the method ran: the GL renderer and the machine's CPUs."""
+    method, machine = comparison.provenance.method, comparison.provenance.machine
+    parts = [f"GL renderer {method.gl_renderer}" if method.gl_renderer else "",
+             f"{machine.get('cpus')} CPUs" if machine.get("cpus") else ""]
+    parts = [p for p in parts if p]
+    return f" ({'; '.join(parts)})" if parts else ""
+
+
 def _verdict_headline(comparison: SceneComparison) -> list[Headline]:
     relmse = _relmse(comparison)
     if relmse is None or relmse.excess is None or not math.isfinite(relmse.excess):
@@ -147,17 +180,19 @@ def _speedup(comparison: SceneComparison) -> tuple[Headline | None, SpeedupWithh
     if warm is None and cold is None:
         return None, None
     relmse = _relmse(comparison)
-    error = (comparison.speedup_point[1] if comparison.speedup_point is not None
-             else relmse.value if relmse is not None else math.nan)
+    first = warm or cold
+    error = _method_error(comparison, bound=first.bound_kind == "lower bound")
+    raw = comparison.speedup_point[1] if comparison.speedup_point is not None else None
     verdict = relmse.distinguishable if relmse is not None else None
-    kind = (warm or cold).kind
-    reason = speedup_reason(error, verdict, kind, _curve_errors(comparison))
+    reason = speedup_reason(error, verdict, first.kind, _curve_errors(comparison),
+                            bound_kind=first.bound_kind, raw=raw)
     if reason is None:
-        text = f"Equal-error speedup, warm against warm: {warm.speedup:.3g}x ({warm.kind})" \
-            if warm is not None else ""
+        text = (f"Equal-error speedup, warm against warm: {warm.text} ({warm.kind})"
+                if warm is not None else "")
         if cold is not None:
-            text += f"{'; cold' if text else 'Cold'} against cold: {cold.speedup:.3g}x"
-        return Headline("speedup", "note", text + f", at relMSE {error:.3g}."), None
+            text += f"{'; cold' if text else 'Cold'} against cold: {cold.text}"
+        return Headline("speedup", "note",
+                        text + f", at excess relMSE {error:.3g}{_hardware(comparison)}."), None
     short, reason = reason
     return (Headline("speedup", "warning", f"Equal-error speedup withheld: {reason}."),
             SpeedupWithheld(reason=reason, warm=warm, cold=cold, short=short))

@@ -33,7 +33,7 @@ from tqdm import tqdm
 
 from harness.compare.evaluate import exposure_for
 from harness.compare.regions import caustic_region
-from harness.compare.scoring import References, Scored
+from harness.compare.scoring import References, Scored, channel_correlation
 from harness.compare.temporal_outputs import temporal_json
 from harness.compare.timed import TimedRender
 from harness.studies.claims import paper_claims
@@ -157,8 +157,11 @@ class ConvergenceStudy:
                                       max_iterations=top,
                                       exposure=exposure_for(reference.irradiance),
                                       progress=tick)
-        claims, verdicts = paper_claims(table, runner=context.runner, reference=reference,
-                                        caustic=caustic)
+        independent = context.references.independent.receivers[0].irradiance
+        claims, verdicts = paper_claims(
+            table, runner=context.runner, reference=reference, caustic=caustic,
+            independent_region=caustic_region(independent),
+            seeds=context.references.reference.metadata.get("seeds"))
         return ConvergenceSection(table, claims, verdicts)
 
 
@@ -175,13 +178,20 @@ class CostStudy:
     def run(self, context: StudyContext) -> Section:
         """The sweep, the speedups warm and cold, and the timing policy."""
         reference = context.references.reference
-        ref0 = reference.receivers[0].irradiance
+        ref0 = reference.receivers[0]
+        independent = context.references.independent.receivers[0].irradiance
         quick = context.options.quick
+        seeds = reference.metadata.get("seeds")
         with context.progress(sweep_size(context.runner.settings, quick=quick),
                               "cost sweep") as tick:
-            outcome = cost_study(context.runner, ref0, caustic_region(ref0),
-                                 reference_photons=int(reference.metadata["photons"]),
-                                 quick=quick, progress=tick)
+            # Scored over the independent reference's caustic region: a region
+            # thresholded on the scored reference would select its noise.
+            outcome = cost_study(
+                context.runner, ref0.irradiance, caustic_region(independent),
+                reference_photons=int(reference.metadata["photons"]), quick=quick,
+                progress=tick, reference_variance=ref0.variance if seeds else None,
+                reference_seeds=int(seeds) if seeds else None,
+                channel_correlation=channel_correlation(context.scene))
         return CostSection(outcome.table, outcome.warm, outcome.cold, outcome.point,
                            outcome.timing())
 

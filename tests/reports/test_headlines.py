@@ -212,3 +212,23 @@ def test_budget_panel_shows_both_sides_and_the_trace(tmp_path, comparison):
     assert next(r["role"] for r in data["method"]) == "emitted"
     rest = next(r for r in data["method"] if r["role"] == "unaccounted")
     assert abs(rest["flux_w"] - 0.01) < 1e-6
+
+
+def test_a_method_not_measurably_off_gets_a_lower_bound_with_its_hardware(comparison):
+    """Method target: when the method's excess interval contains 0 the cost study gives
+    the speedup at the interval's upper end as a lower bound; the headline shows it
+    as "at least N×" (not withheld), with the GL renderer and the CPU count the method
+    ran on. An estimate shows its 95 % interval."""
+    bound = replace(comparison.speedup, bound_kind="lower bound")
+    within = with_headlines(_with_cost(_with_excess(comparison, 1e-5, -2e-5, 4e-5),
+                                       speedup=bound, speedup_cold=None))
+    (speedup,) = [h for h in within.headlines if h.kind == "speedup"]
+    assert within.speedup_withheld is None
+    assert f"at least {bound.speedup:.3g}×" in speedup.text
+    machine = replace(within.provenance, machine={"cpus": 2}, method=replace(
+        within.provenance.method, gl_renderer="llvmpipe (LLVM 15.0.6, 256 bits)"))
+    shown = with_headlines(replace(within, provenance=machine))
+    (speedup,) = [h for h in shown.headlines if h.kind == "speedup"]
+    assert "GL renderer llvmpipe (LLVM 15.0.6, 256 bits); 2 CPUs" in speedup.text
+    estimate = replace(comparison.speedup, low=10.0, high=20.0)
+    assert estimate.text == f"{estimate.speedup:.3g}× (95 % [10, 20])"

@@ -15,6 +15,7 @@ import pytest
 
 from harness.checks import GOLDEN_DIR
 from harness.checks.golden import (
+    FRESH_SEEDS,
     GOLDEN_SCENES,
     GOLDEN_SETTINGS,
     GoldenError,
@@ -25,6 +26,7 @@ from harness.checks.golden import (
 )
 from harness.checks.ztest import write_failure_images, z_test
 from renderers.exr import read_exr
+from scenes import effects_of
 from tests.conftest import SCENES
 
 # ---- the Z-test on synthetic data ----------------------------------------------------
@@ -179,8 +181,12 @@ def _z_test_fresh(name, failure_dir, record_property):
     maps, photons = fresh_reference(scene, seed=golden.entry["seed"] + 100)
     record_property("checks", len(maps))
     for i, (old, new) in enumerate(zip(golden.receivers, maps, strict=True)):
+        # t quantiles on each variance's degrees of freedom; a dispersion scene traces
+        # one pass per channel (independent channel noise).
         result = z_test(new.irradiance, old.irradiance, old.variance, test_photons=photons,
-                        reference_photons=golden.photons, test_variance=new.variance)
+                        reference_photons=golden.photons, test_variance=new.variance,
+                        reference_seeds=int(golden.entry["seeds"]), test_seeds=FRESH_SEEDS,
+                        channel_correlation=0.0 if "dispersion" in effects_of(scene) else 1.0)
         print(f"{name} receiver{i}: {result.summary()}")
         if not result.passed:
             written = write_failure_images(failure_dir, f"golden-{name}-receiver{i}",

@@ -23,7 +23,7 @@ import pytest
 from harness.checks import GAPS_FILE
 from harness.checks.analytic import ideal_sphere_caustic
 from harness.checks.bounds import load_gaps
-from harness.checks.golden import GOLDEN_SCENES, fresh_reference, golden_scene
+from harness.checks.golden import FRESH_SEEDS, GOLDEN_SCENES, fresh_reference, golden_scene
 from harness.checks.locks import LOCKED_METHODS
 from harness.checks.physical import (
     FLUX_TOLERANCE,
@@ -183,7 +183,8 @@ def _z(golden_renders, maps, photons):
     golden = golden_renders.golden("glass_sphere")
     ref = golden.receivers[0]
     return z_test(maps[0].irradiance, ref.irradiance, ref.variance, test_photons=photons,
-                  reference_photons=golden.photons, test_variance=maps[0].variance)
+                  reference_photons=golden.photons, test_variance=maps[0].variance,
+                  reference_seeds=int(golden.entry["seeds"]), test_seeds=FRESH_SEEDS)
 
 
 def test_fresh_reference_meets_the_physical_requirements(golden_renders, glass_renders,
