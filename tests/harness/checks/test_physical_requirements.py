@@ -97,9 +97,9 @@ def test_physical_requirement_of_method(method_checks, record_property, name, me
     assert len(found) == 1, f"{check} did not apply"
     c = found[0]
     record_property("checks", 1)
-    print(f"{name} ({method}) {check}: {c.value:.6g} {c.bound_text} — {c.provenance}")
+    print(f"{name} ({method}) {check}: {c.value:.6g} {c.bound_text} — {c.origin}")
     assert c.passed, f"{name} ({method}) {check}: {c.value:.5g} violates {c.bound_text} " \
-        f"({c.provenance})"
+        f"({c.origin})"
 
 
 def test_bunny_flux_excess_is_a_known_gap_of_both_presets(method_checks, record_property):
@@ -151,7 +151,7 @@ def test_physical_requirement_of_golden_reference(golden_renders, ideal, record_
     failed = [c for c in checks if not c.passed]
     for c in checks:
         print(f"{name} {c.metric}: {c.value:.6g} {c.bound_text}")
-    assert not failed, [(c.metric, c.value, c.bound_text, c.provenance) for c in failed]
+    assert not failed, [(c.metric, c.value, c.bound_text, c.origin) for c in failed]
 
 
 def _fresh(scene, seed):
