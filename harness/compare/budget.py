@@ -131,6 +131,7 @@ REFERENCE_LABELS = {
     "absorbed_medium": "absorbed in the medium (Beer-Lambert)",
     "absorbed_surface": "absorbed at a surface (conductor 1 - R, diffuse object)",
     "shading": "shading-normal adjoint factor (negative: a gain)",
+    "roulette": "Russian roulette past 64 events (zero in expectation: its sign varies)",
     "deposited": "deposited on a counted chain: the caustic maps",
 }
 _CAP_ALL_PATHS = "cut by the safety cap of specular events (all-paths mode)"

@@ -4,8 +4,8 @@
 and adds banners (``headlines``), and withholds the equal-error speedup where the
 error it is computed for means nothing (``speedup_withheld``). Rules:
 
-* **reference noise**: the reference stopped at its photon budget above its noise
-  target (``relative_noise > target_noise``, ``stopped_by == "budget"``), with its
+* **reference noise**: the reference stopped at its photon budget or its time cap
+  above its noise target (``relative_noise > target_noise``), with its
   relative noise per channel over the scored caustic region. Every interval below
   is wider for it.
 * **verdict**: whether the method is measurably off the noise-free image: the 95 %
@@ -137,12 +137,13 @@ def _noise_headlines(comparison: SceneComparison) -> list[Headline]:
     ref = comparison.provenance.reference
     noise, target = ref.get("relative_noise"), ref.get("target_noise")
     scored = (ref.get("relative_noise_scored") or {}).get("receiver0")
-    if (ref.get("stopped_by") == "budget" and noise is not None and target is not None
-            and math.isfinite(noise) and noise > target):
+    if (ref.get("stopped_by") in ("budget", "time_cap") and noise is not None
+            and target is not None and math.isfinite(noise) and noise > target):
         channels = (f"; per channel over the scored caustic region, R G B = "
                     f"{', '.join(f'{n:.3g}' for n in scored)}" if scored else "")
         out.append(Headline("reference_noise", "warning", (
-            f"The reference missed its noise target: it stopped at its photon budget "
+            f"The reference missed its noise target: it stopped at its "
+            f"{'time cap' if ref.get('stopped_by') == 'time_cap' else 'photon budget'} "
             f"({ref.get('photons')} photons per seed, {ref.get('seeds')} seeds) with a "
             f"relative noise of {noise:.3g} in its caustic region{channels}, against a "
             f"target of {target:.3g}. Every interval on this page is wider for it.")))
