@@ -25,6 +25,7 @@ from harness.metrics import (
 )
 from harness.studies.pareto import equal_error_speedup, pareto_front
 from reports import images
+from reports.display import difference_range
 from reports.records import (
     Check,
     ConvergenceSection,
@@ -101,8 +102,8 @@ def _view(prefix, shape, rng, *, shift, scale, object_mask=False, variance=False
                                        function(seed2, reference)))
     metrics.append(MetricValue(prefix, "full", "flip", flip, flip_error(
         seed2, reference, start_exposure=start, stop_exposure=stop)))
-    diff_range = float(np.percentile(np.abs(signed).mean(axis=-1), 99.5))
-    return images, metrics, white, diff_range
+    # The scene's difference scale, from the reference alone (harness.compare.scoring).
+    return images, metrics, white, difference_range(reference)
 
 
 def convergence_table(rng) -> Table:

@@ -210,9 +210,13 @@ def test_hovering_shows_the_exr_values(browser, pages, known, exr, mode):
         shown_peak = (int(peak_x), int(height - 1 - peak_y if view != "camera" else peak_y))
         panels = page.evaluate(f"""Array.from(document.querySelectorAll(
             '#view-{view} .viewport')).map((v) => v.dataset.panel)""")
-        assert set(panels) == {"method", "reference", "signed", "ssim", "flip", "regions", "ab"}
+        # The difference map's standard-error ("se") and z-score ("z") maps stand
+        # beside it where the reference has a variance, as here.
+        assert set(panels) == {"method", "reference", "signed", "se", "z", "ssim", "flip",
+                               "regions", "ab"}
         for panel, (x, y) in zip(panels, [shown_peak, (0, 0), (width - 1, height - 1),
-                                          (7, 3), shown_peak, (width // 2, 5), (11, 13)],
+                                          (2, height - 2), (width - 3, 1), (7, 3), shown_peak,
+                                          (width // 2, 5), (11, 13)],
                                      strict=True):
             page.mouse.move(*_point(page, view, panel, x, y))
             state = _probe(page)
@@ -236,7 +240,7 @@ def test_hovering_shows_the_exr_values(browser, pages, known, exr, mode):
             squares = page.evaluate(f"""Array.from(document.querySelectorAll(
                 '#view-{view} rect.probe-mark')).map((r) => [r.getAttribute('x'),
                 r.getAttribute('y')])""")
-            assert squares == [[str(x), str(y)]] * 7
+            assert squares == [[str(x), str(y)]] * len(panels)
     if mode == "linked":
         assert any(r.endswith("/data_camera.js") for r in log.requests), log.requests
         assert any(f"/{BLOB_FOLDER}/" in r for r in log.requests), log.requests
@@ -309,7 +313,8 @@ def test_a_dragged_profile_plots_the_data(browser, pages, known, exr, mode):
     lines = page.evaluate("""Array.from(document.querySelectorAll(
         '#view-camera line.profile-line')).map((l) => ['x1', 'y1', 'x2', 'y2'].map(
         (a) => parseFloat(l.getAttribute(a))))""")
-    assert lines == [[5.5, 80.5, 120.5, 10.5]] * 7
+    # One line on every panel of the view (nine: see test_hovering_shows_the_exr_values).
+    assert lines == [[5.5, 80.5, 120.5, 10.5]] * 9
     assert page.locator("#view-camera").get_attribute("data-zoom") == "1 0 0"
     link = page.locator("#view-camera a.profile-download")
     assert link.get_attribute("href").startswith("data:text/csv")
@@ -401,7 +406,8 @@ def test_zoom_and_pan_stay_in_sync(browser, pages, known):
     page.wait_for_timeout(100)
     zooms = page.evaluate("""Array.from(document.querySelectorAll('#view-camera .zoom'))
         .map((z) => z.dataset.zoom)""")
-    assert len(zooms) == 7 and len(set(zooms)) == 1
+    # Nine panels: the seven image panels, and the standard-error and z-score maps.
+    assert len(zooms) == 9 and len(set(zooms)) == 1
     scale = float(zooms[0].split()[0])
     assert scale == pytest.approx(np.exp(1.2), rel=1e-6)
     boxes = np.array(_visible(page, "camera"))
