@@ -60,13 +60,17 @@ float light_distance(vec3 x) {
 
 // Relative intensity along the unit travel direction l: spot cone (linear in angle
 // between beam width and cutoff, like Mitsuba's spot) and the Lambertian cosine of
-// an area-light sample.
+// an area-light sample. The ramp is clamped to [0, 1]: just inside the cutoff
+// (c > cos cutoff) a single-precision acos(c) can exceed the cutoff angle by its
+// rounding (llvmpipe's acos: ~1e-4 rad), which would make the intensity, and every
+// irradiance and flux derived from it, negative.
 float light_falloff(vec3 l) {
     float f = 1.0;
     if (u_light_type == 1) {
         float c = dot(l, u_light_dir);
         if (c <= u_spot.x) return 0.0;
-        if (c < u_spot.y) f = (u_spot.z - acos(clamp(c, -1.0, 1.0))) / (u_spot.z - u_spot.w);
+        if (c < u_spot.y)
+            f = clamp((u_spot.z - acos(clamp(c, -1.0, 1.0))) / (u_spot.z - u_spot.w), 0.0, 1.0);
     }
     if (u_lambertian == 1) f *= max(dot(l, u_light_dir), 0.0);
     return f;

@@ -2,7 +2,9 @@
 
 * ``rock.obj``: a squat, bumpy, closed rock (a non-planar mesh receiver, Fig. 5);
 * ``cube.obj``: a unit cube with one normal per face (flat shading), for the
-  total-internal-reflection hard case.
+  total-internal-reflection hard case;
+* ``torus.obj``: a closed torus (major radius 1, minor radius 0.35, 64 x 24
+  segments) in the xy-plane, for the spot-light scene.
 
 Deterministic, so the committed files are reproducible byte for byte.
 """
@@ -36,3 +38,7 @@ box = trimesh.creation.box(extents=[1.0, 1.0, 1.0])
 corners = box.triangles.reshape(-1, 3)  # three vertices per face: flat normals
 face_normals = np.repeat(box.face_normals, 3, axis=0)
 write_obj("cube.obj", corners, np.arange(len(corners)).reshape(-1, 3), face_normals)
+
+torus = trimesh.creation.torus(major_radius=1.0, minor_radius=0.35, major_sections=64,
+                               minor_sections=24)
+write_obj("torus.obj", torus.vertices, torus.faces)
