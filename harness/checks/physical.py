@@ -7,6 +7,13 @@ On the method (each check name is what ``data/known_gaps.toml`` refers to):
     Every output (camera image, receiver maps) is finite. Irradiance and radiance are
     finite by definition; a NaN or Inf is a division by zero or a lookup outside the
     receiver that reached the image. Bound: value 1 (all finite).
+``non-negative``
+    No output (camera image, receiver maps) holds a negative value: radiance and
+    irradiance are sums of non-negative terms, so a negative value is an error in the
+    method (e.g. a falloff or filter that goes negative), never noise. Bound: 0
+    negative values. A method that fails it is still scored: HDR-FLIP, defined on
+    non-negative images only, scores a copy of its image clamped at 0
+    (:func:`harness.compare.evaluate.score_value`).
 ``energy``
     Caustic flux on the receivers ≤ the flux the light sends through the caustic
     objects' bounding spheres (:func:`harness.checks.stability.incident_flux_bound`).
@@ -81,7 +88,7 @@ FOCUS_WINDOW = 4.0
 FOCUS_SLACK = 0.1
 #: Radii (texels) of the encircled-flux profile.
 PROFILE_RADII = (1, 2, 4, 8)
-CHECK_NAMES = ("finite", "energy", "flux agreement", "no TIR in a sphere",
+CHECK_NAMES = ("finite", "non-negative", "energy", "flux agreement", "no TIR in a sphere",
                "reference energy", "reference flux", "reference focus", "reference profile")
 
 
@@ -129,6 +136,10 @@ def method_requirements(scene: Scene, geometry: SceneGeometry, *, method_maps, r
         _check("finite", 1.0 if stability.get("finite") else 0.0, 1.0, "min",
                "irradiance and radiance are finite by definition: a NaN or Inf is a "
                "division by zero or an off-receiver lookup that reached the image"),
+        _check("non-negative", stability.get("negative_values", 0), 0.0, "max",
+               "radiance and irradiance are sums of non-negative terms: a negative value "
+               f"is the method's error (least value {stability.get('min_value', 0.0):.3g}); "
+               "FLIP scores the image clamped at 0"),
         _check("energy", stability["flux_over_bound"], 1 + ENERGY_SLACK, "max",
                "receiver caustic flux / flux the light sends through the objects' bounding "
                "spheres (harness.checks.stability); 1e-3: float32 accumulation"),

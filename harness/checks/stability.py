@@ -73,7 +73,10 @@ def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResul
                       convergence=None, *, hits: dict[str, np.ndarray] | None = None) -> dict:
     """What the report shows under "Numerical stability" for one render.
 
-    Keys: ``finite`` (every output finite), ``lost_splats`` and ``lost_fraction``,
+    Keys: ``finite`` (every output finite), ``negative_values`` (the number of
+    negative values over the camera image and receiver maps, and ``min_value`` the
+    least value: radiance and irradiance are never negative), ``lost_splats`` and
+    ``lost_fraction``,
     ``flux_over_bound`` (receiver caustic flux / incident bound, must be <= 1),
     the flux shares ``tir_flux_fraction`` (lost to total internal reflection at the
     exit surface), ``unconverged_flux_fraction`` (held back by verified hits) and,
@@ -84,13 +87,16 @@ def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResul
     """
     arrays = [result.camera] + [m.irradiance for m in result.receivers]
     finite = bool(all(np.isfinite(a).all() for a in arrays))
+    negative = int(sum(np.count_nonzero(np.asarray(a) < 0) for a in arrays))
+    least = float(min(np.nanmin(a) if np.size(a) else 0.0 for a in arrays))
     counts = result.metadata.get("status_counts") or {}
     traced = sum(v for k, v in counts.items() if k != "empty") or 1
     lost = int(result.metadata.get("lost_splats", 0))
     bound = incident_flux_bound(scene, geometry)
     flux = sum(m.total_flux() for m in result.receivers)
     ratio = float(np.max(np.where(bound > 0, flux / np.maximum(bound, 1e-300), 0.0)))
-    summary = {"finite": finite, "lost_splats": lost, "lost_fraction": lost / traced,
+    summary = {"finite": finite, "negative_values": negative, "min_value": least,
+               "lost_splats": lost, "lost_fraction": lost / traced,
                "flux_over_bound": ratio, "energy_ok": ratio <= 1.0 + 1e-3}
     shares = result.metadata.get("status_flux_fraction") or {}
     for status in ("tir", "unconverged"):

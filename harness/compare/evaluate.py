@@ -30,7 +30,7 @@ from harness.metrics import (
 )
 from reports.records import MetricValue
 
-__all__ = ["Exposure", "exposure_for", "score_value", "score_view"]
+__all__ = ["Exposure", "exposure_for", "flip_input", "score_value", "score_view"]
 
 FLIP_STOPS = 3.0
 
@@ -51,9 +51,20 @@ def exposure_for(reference: np.ndarray, *, mask: np.ndarray | None = None) -> Ex
     return Exposure(white, centre - FLIP_STOPS, centre + FLIP_STOPS)
 
 
+def flip_input(image) -> np.ndarray:
+    """The image HDR-FLIP scores: ``image`` itself, or a copy clamped at 0 where it holds
+    negative values (FLIP is defined on non-negative images only). Radiance is never
+    negative, so a method that writes negatives fails the ``non-negative`` physical
+    requirement (:mod:`harness.checks.physical`), which records them; its other
+    metrics score the image as written."""
+    image = np.asarray(image)
+    return np.maximum(image, 0.0) if (image < 0).any() else image
+
+
 def score_value(metric: str, method, reference, *, mask, exposure: Exposure) -> float:
     """One metric of ``method`` against ``reference`` over ``mask``; NaN when undefined
-    (e.g. PSNR of a black region, or a flux ratio where the reference has no energy)."""
+    (e.g. PSNR of a black region, or a flux ratio where the reference has no energy).
+    FLIP scores :func:`flip_input` of ``method``."""
     try:
         if metric == "relmse":
             return relative_mse(method, reference, mask=mask)
@@ -64,7 +75,7 @@ def score_value(metric: str, method, reference, *, mask, exposure: Exposure) -> 
         if metric == "ssim":
             return structural_similarity(method, reference, white=exposure.white, mask=mask)
         if metric == "flip":
-            return flip_error(method, reference, start_exposure=exposure.flip_start,
+            return flip_error(flip_input(method), reference, start_exposure=exposure.flip_start,
                               stop_exposure=exposure.flip_stop, mask=mask)
         if metric == "flux_ratio":
             return flux_ratio(method, reference, mask=mask)
@@ -106,7 +117,7 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
         maps over the full image.
     """
     _, ssim_map = structural_similarity(method, reference, white=exposure.white, return_map=True)
-    _, flip_map = flip_error(method, reference, start_exposure=exposure.flip_start,
+    _, flip_map = flip_error(flip_input(method), reference, start_exposure=exposure.flip_start,
                              stop_exposure=exposure.flip_stop, return_map=True)
     inputs = None
     if variance is not None and seeds is not None and seeds >= 2:

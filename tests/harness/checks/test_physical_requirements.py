@@ -56,7 +56,7 @@ def _all_spheres(name: str) -> bool:
 
 def _method_cases():
     for name in GOLDEN_SCENES:
-        names = ["finite", "energy", "flux agreement"]
+        names = ["finite", "non-negative", "energy", "flux agreement"]
         if _all_spheres(name):
             names.append("no TIR in a sphere")
         for method in LOCKED_METHODS:
