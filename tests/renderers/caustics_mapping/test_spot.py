@@ -18,8 +18,9 @@ import math
 import numpy as np
 
 from renderers.caustics_mapping import render_frame
-from scenes import parse_scene
+from scenes import load_scene, parse_scene, with_settings
 from tests.renderers import spot_profile
+from tests.renderers.caustics_mapping.conftest import ROOT
 
 POSITION = np.array([0.3, -0.2, 2.5])
 AXIS = np.array([-0.2, 0.1, -1.0])
@@ -123,3 +124,57 @@ def test_direct_light_under_a_spot_is_albedo_over_pi_i_falloff_cos_over_r2(ctx):
     assert np.all(image[beyond] == 0.0)
     for wrong in (falloff(theta, cutoff=CUTOFF, beam=CUTOFF), smoothstep_falloff(theta)):
         assert np.abs(wrong - expected).max() > 0.05
+
+
+def test_the_falloff_is_never_negative_just_inside_the_cutoff(ctx):
+    """``light_falloff`` over the 262,144 float32 cosines just above cos(cutoff) (a
+    band of 0.016 rad) for cutoffs of 26..40 degrees, where llvmpipe's acos rounds past
+    the cutoff angle by up to 6e-5 rad (measured) and the unclamped linear ramp gave
+    down to -1.8e-4: every value is in [0, 1] and within 1e-3 of the float64 ramp
+    (4e-4 = 6e-5 rad over the 0.14 rad ramp, rounded up)."""
+    source = (
+        "#version 430\n#define COMPUTE_SHADER\n" + _common_glsl() + """
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) buffer Values { float values[]; };
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    float c = values[i];
+    values[i] = light_falloff(c * u_light_dir + sqrt(max(1.0 - c * c, 0.0)) * vec3(1, 0, 0));
+}""")
+    program = ctx.compute_shader(source)
+    for cutoff in (26.0, 30.0, 35.0, 40.0):
+        cut, beam = math.radians(cutoff), math.radians(0.4 * cutoff)
+        cosines = (np.float32(math.cos(cut))
+                   + np.arange(1, 64 * 4096 + 1, dtype=np.float32) * np.float32(6e-8))
+        buffer = ctx.buffer(cosines.astype(np.float32).tobytes())
+        buffer.bind_to_storage_buffer(0)
+        program["u_light_type"] = 1
+        program["u_light_dir"] = (0.0, 0.0, -1.0)
+        program["u_spot"] = (math.cos(cut), math.cos(beam), cut, beam)
+        program.run(len(cosines) // 64)
+        values = np.frombuffer(buffer.read(), np.float32)
+        buffer.release()
+        exact = (cut - np.arccos(cosines.astype(np.float64))) / (cut - beam)
+        assert values.min() >= 0.0 and values.max() <= 1.0, cutoff
+        assert np.abs(values - exact).max() < 1e-3, cutoff
+
+
+def _common_glsl() -> str:
+    """``common.glsl``, which includes no other file."""
+    return (ROOT / "renderers" / "caustics_mapping" / "common.glsl").read_text()
+
+
+def test_no_negative_pixel_on_the_spot_torus(ctx):
+    """The bundled spot_torus scene (its spot's cutoff ring on the floor in the
+    camera's view) renders with no negative value in the camera image or the
+    receiver map under either preset; before the falloff was clamped, 14 (paper) and
+    11 (strong) camera pixels were negative at its own settings."""
+    for preset in ("paper", "strong"):
+        scene = with_settings(load_scene(ROOT / "scenes" / "spot_torus.toml"),
+                              {"preset": preset})
+        result = render_frame(scene, ctx=ctx, lookups=False).result
+        assert result.camera.min() >= 0.0, preset
+        # The lit disc (radius about 3 m, the cutoff) fills 28 % of the image.
+        assert (result.camera > 0).mean() > 0.2, preset
+        for receiver in result.receivers:
+            assert receiver.irradiance.min() >= 0.0, preset
