@@ -138,7 +138,8 @@ def speedup_text(speedup: EqualErrorSpeedup | None) -> str:
     """An equal-error speedup as the report shows it: ``12.3× (95 % interval 8.1×–19×)``,
     ``at least 40×`` (the method is not measurably off the truth: no upper end),
     ``at most 2×`` (the reference's cheapest budget is already as accurate), or the
-    bare estimate where no interval was computed (or it has no width); ``—`` for None."""
+    bare estimate where no interval was computed (or it rounds to one number); ``—`` for
+    None."""
     if speedup is None:
         return "—"
     value = f"{_number(speedup.speedup)}×"
@@ -147,8 +148,9 @@ def speedup_text(speedup: EqualErrorSpeedup | None) -> str:
     if speedup.bound_kind == "upper bound":
         return f"at most {value}"
     low, high = float(speedup.low), float(speedup.high)
-    # An interval of zero width (no uncertainty was propagated) says nothing: omitted.
-    if math.isfinite(low) and math.isfinite(high) and low < high:
+    # An interval that rounds to one number at the shown digits (no uncertainty was
+    # propagated, e.g. an exact fit) says nothing: omitted.
+    if math.isfinite(low) and math.isfinite(high) and _number(low) != _number(high):
         return f"{value} (95 % interval {_number(low)}×–{_number(high)}×)"
     if math.isfinite(low) and high == math.inf:
         return f"{value} (95 % interval from {_number(low)}×)"

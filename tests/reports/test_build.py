@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from reports import build_report, scene_folder
+from reports.build import hardware, speedup_text
 from reports.page_data import RELATIVE_BOUND
-from reports.records import METRIC_FORMULAS, Table
+from reports.records import METRIC_FORMULAS, EqualErrorSpeedup, Table
 from tests.reports.conftest import HOSTILE_NAME, hdr_uris
 from tests.reports.data_helpers import page_layers
 
@@ -257,3 +258,41 @@ def test_an_open_mesh_is_said_on_the_page(tmp_path, comparison):
     closed_page = next((tmp_path / "closed").glob("*/index.html")).read_text()
     assert 'id="open-mesh"' in open_page and "open surface" in open_page
     assert 'id="open-mesh"' not in closed_page
+
+
+@pytest.mark.parametrize(("speedup", "text"), [
+    (EqualErrorSpeedup(12.5, 3.0, "interpolated", low=8.25, high=19.5),
+     "12.5× (95 % interval 8.25×–19.5×)"),
+    # An exact fit propagates no uncertainty: ends equal to 4 digits say nothing.
+    (EqualErrorSpeedup(1201.8, 3.0, "interpolated", low=1201.81912, high=1201.81913), "1202×"),
+    (EqualErrorSpeedup(40.0, 3.0, "extrapolated", low=40.0, high=float("inf"),
+                       bound_kind="lower bound"), "at least 40× (95 % confidence)"),
+    (EqualErrorSpeedup(2.0, 3.0, "bound", high=2.0, bound_kind="upper bound"), "at most 2×"),
+    (EqualErrorSpeedup(3.0, 3.0, "interpolated"), "3×"),
+])
+def test_a_speedup_shows_its_interval_or_bound(speedup, text):
+    """An estimate shows its 95 % interval where one was computed; a lower bound reads
+    "at least", an upper bound "at most"."""
+    assert speedup_text(speedup) == text
+
+
+def test_hardware_names_the_gpu_only_when_one_renders(comparison):
+    """An NVIDIA GL renderer names its GPU and a CUDA reference runs on a GPU; llvmpipe
+    and an LLVM reference run on the CPU; nothing recorded is said to be so."""
+    def with_(gl, variant, machine):
+        prov = comparison.provenance
+        return replace(comparison, provenance=replace(
+            prov, method=replace(prov.method, gl_renderer=gl), machine=machine,
+            reference={"variant": variant} if variant else {}))
+
+    gpu = hardware(with_("NVIDIA H100 80GB HBM3/PCIe/SSE2", "cuda_ad_rgb",
+                         {"cpus": 16, "processor": "x86_64"}))
+    assert gpu["gpu"] == "NVIDIA H100 80GB HBM3" and gpu["reference_device"] == "a GPU (CUDA)"
+    assert "16 CPUs, processor x86_64" in gpu["text"]
+    cpu = hardware(with_("llvmpipe (LLVM 19.1.1, 256 bits)", "llvm_ad_rgb", {"cpus": 2}))
+    assert cpu["gpu"] is None and "no GPU" in cpu["text"] and "on the CPU" in cpu["text"]
+    assert "processor not recorded" in cpu["text"]
+    unknown = hardware(with_(None, None, {}))
+    assert unknown["gpu"] is None
+    assert all(part in unknown["text"] for part in (
+        "GL renderer not recorded", "CPU count not recorded", "variant not recorded"))
