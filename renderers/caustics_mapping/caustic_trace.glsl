@@ -91,6 +91,11 @@ void estimate_record(int record, int k, float d) {
     history[record + k] = d;
 }
 
+// The estimators stop once |h| is at most u_converged positions-map texels at the
+// estimate (estimators.glsl; 0: only at h = 0).
+uniform float u_converged;
+#define ESTIMATE_TOLERANCE(x) (u_converged * map_texel_width(x, u_positions_size))
+
 #include "estimators.glsl"
 
 // The exit surface at x's projection into the object views (u_back_size texels per

@@ -39,6 +39,12 @@ class MapLookup:
     slots : ndarray (6,) int, optional
         Atlas slot of each view, -1 where the view is not stored (default: view i in
         slot i).
+    rect : tuple of float, optional
+        (x0, x1, y0, y1) of the views on the view plane: tangents (perspective) or
+        metres (orthographic), the shader's ``u_map_rect``; needed only for
+        :meth:`texel_width`.
+    perspective : bool
+        Perspective views (point and spot lights) or orthographic (directional).
     """
 
     atlas: np.ndarray
@@ -47,6 +53,20 @@ class MapLookup:
     cube: bool
     light_position: np.ndarray
     slots: np.ndarray | None = None
+    rect: tuple[float, float, float, float] | None = None
+    perspective: bool = True
+
+    def texel_width(self, x: np.ndarray) -> np.ndarray:
+        """Width (m) of one texel at points x (K, 3), float32: the view-plane texel
+        width times the distance from the light (perspective) or the texel width
+        (orthographic); ``map_texel_width`` in ``common.glsl``."""
+        if self.rect is None:
+            raise ValueError("texel_width needs the views' rect")
+        x0, x1, y0, y1 = self.rect
+        w = _F(max(x1 - x0, y1 - y0)) / _F(self.size)
+        if not self.perspective:
+            return np.full(len(x), w, _F)
+        return (w * _norm(x.astype(_F) - self.light_position.astype(_F))).astype(_F)
 
     def locate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(face, atlas texel (K, 2) as x, y, inside) for points x (K, 3)."""
@@ -138,7 +158,7 @@ def _norm(a: np.ndarray) -> np.ndarray:
 def estimate_distances(
     lookup: MapLookup, origins: np.ndarray, directions: np.ndarray, *, estimator: str,
     iterations: int, eps: float, safeguarded: bool = False, filtered: bool = False,
-    start: str = "receiver", start_distance: float = 0.1,
+    start: str = "receiver", start_distance: float = 0.1, converged: float = 0.0,
 ) -> MirrorResult:
     """Run one estimator on rays (v, r), like the shader does.
 
@@ -155,6 +175,11 @@ def estimate_distances(
         Bilinear lookups within one receiver.
     start, start_distance
         ``"receiver"`` (d_1 = g(0)) or ``"fixed"`` (d_1 = ``start_distance``, m).
+    converged : float
+        An estimate with |h| at most this many positions texels
+        (:meth:`MapLookup.texel_width`) at it ends the iterations and is kept
+        (``ESTIMATE_TOLERANCE`` in ``estimators.glsl``; the trace pass's
+        ``TraceOptions.converged``); 0: only at h = 0.
 
     Returns
     -------
@@ -189,8 +214,9 @@ def estimate_distances(
     hi = np.full(k_count, _F(-1))
     hist[:, 0] = d
     seen = np.full(k_count, _F(-1) if start == "fixed" else _F(0))
+    converged_at = np.zeros(k_count, bool)     # iterations ended at a converged estimate
     for k in range(1, iterations + 1):
-        active = status == HIT
+        active = (status == HIT) & ~converged_at
         g, t, ok = g_of(d)
         missed = active & ~ok
         if safeguarded:
@@ -207,6 +233,14 @@ def estimate_distances(
         active &= ok
         seen = np.where(active, d, seen)
         h = (g - d).astype(_F)
+        if converged > 0:
+            tol = (_F(converged) * lookup.texel_width(v + d[:, None] * r)).astype(_F)
+        else:
+            tol = np.zeros(k_count, _F)
+        # Converged (|h| within the tolerance): the estimate is kept from here on.
+        done = active & (np.abs(h) <= tol)
+        converged_at |= done
+        active &= ~done
         lo = np.where(active & (h >= 0), np.maximum(lo, d), lo)
         hi = np.where(active & (h < 0), np.where(hi < 0, d, np.minimum(hi, d)), hi)
         finite = np.ones(k_count, bool)

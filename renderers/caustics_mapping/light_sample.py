@@ -195,7 +195,8 @@ def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: i
         acc.lookups.append(MapLookup(
             positions.read_positions().copy(),
             np.stack([v.view_proj for v in light.map_views]), s.positions_map,
-            light.cube, light.position.copy(), np.array(light.slots)))
+            light.cube, light.position.copy(), np.array(light.slots),
+            rect=light.map_views[0].bounds, perspective=light.map_views[0].perspective))
     front, back, traces = _trace_objects(state, light, positions=positions)
     caustic = splat_maps(state, light, faces=faces, traces=traces, positions=positions)
     shadow = None

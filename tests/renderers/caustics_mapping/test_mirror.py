@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 from renderers.caustics_mapping import estimate_distances, render_frame
-from renderers.caustics_mapping.caustic_trace import STATUS
+from renderers.caustics_mapping.caustic_trace import CONVERGED, STATUS
 
 from .conftest import SCENES, small_scene
 
@@ -52,7 +52,8 @@ def test_shader_matches_mirror(ctx, name, estimator, safeguarded):
     assert traced.sum() > 500
     mirror = estimate_distances(
         frame.lookups[0], hits["origin"][traced], hits["direction"][traced],
-        estimator=estimator, iterations=4, eps=frame.eps, safeguarded=safeguarded)
+        estimator=estimator, iterations=4, eps=frame.eps, safeguarded=safeguarded,
+        converged=CONVERGED if safeguarded else 0.0)
     keep = mirror.margin > MARGIN
     assert keep.sum() > 500
     shader = hits["history"][traced][keep]
@@ -89,7 +90,7 @@ def test_filtered_lookups_and_start_match_the_mirror(ctx, estimator, start):
     mirror = estimate_distances(
         frame.lookups[0], hits["origin"][traced], hits["direction"][traced],
         estimator=estimator, iterations=4, eps=frame.eps, safeguarded=True, filtered=True,
-        start=start, start_distance=scene.settings.start_distance)
+        start=start, start_distance=scene.settings.start_distance, converged=CONVERGED)
     shader = hits["history"][traced]
     scale = np.maximum(np.abs(shader), np.abs(mirror.history)).max(axis=1) + 1e-30
     rtol, fraction = FILTERED_TOLERANCE
