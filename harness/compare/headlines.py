@@ -150,15 +150,6 @@ def _noise_headlines(comparison: SceneComparison) -> list[Headline]:
     return out
 
 
-def _hardware(comparison: SceneComparison) -> str:
-    """Where the method ran: the GL renderer and the machine's CPUs."""
-    method, machine = comparison.provenance.method, comparison.provenance.machine
-    parts = [f"GL renderer {method.gl_renderer}" if method.gl_renderer else "",
-             f"{machine.get('cpus')} CPUs" if machine.get("cpus") else ""]
-    parts = [p for p in parts if p]
-    return f" ({'; '.join(parts)})" if parts else ""
-
-
 def _verdict_headline(comparison: SceneComparison) -> list[Headline]:
     relmse = _relmse(comparison)
     if relmse is None or relmse.excess is None or not math.isfinite(relmse.excess):
@@ -193,7 +184,7 @@ def _speedup(comparison: SceneComparison) -> tuple[Headline | None, SpeedupWithh
         if cold is not None:
             text += f"{'; cold' if text else 'Cold'} against cold: {cold.text}"
         return Headline("speedup", "note",
-                        text + f", at excess relMSE {error:.3g}{_hardware(comparison)}."), None
+                        text + f", at excess relMSE {error:.3g}."), None
     short, reason = reason
     return (Headline("speedup", "warning", f"Equal-error speedup withheld: {reason}."),
             SpeedupWithheld(reason=reason, warm=warm, cold=cold, short=short))
