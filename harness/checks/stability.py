@@ -117,12 +117,13 @@ def estimate_outcomes(scene: Scene, geometry: SceneGeometry, hits: dict[str, np.
     is not finite, negative or over 10x the exact distance; ``oscillating`` = the
     last two steps change sign, the last at least 3/4 of the one before and over a
     texel). Vertices whose exact ray meets no receiver are left out; so are those
-    the trace never estimated (empty, total internal reflection, no exit).
+    the trace never estimated (empty, total internal reflection, no exit, re-entered).
 
     Returns the share of each outcome (:data:`OUTCOMES`) and ``count`` (vertices
     judged)."""
     status = hits["status"].astype(int)
-    traced = ~np.isin(status, [STATUS["empty"], STATUS["tir"], STATUS["no_exit"]])
+    traced = ~np.isin(status, [STATUS["empty"], STATUS["tir"], STATUS["no_exit"],
+                               STATUS["reentered"]])
     exact = ReceiverTracer(geometry)(hits["origin"][traced], hits["direction"][traced])
     history = hits["history"][traced].astype(np.float64)
     lost = status[traced] == STATUS["lost"]

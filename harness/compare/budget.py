@@ -19,7 +19,7 @@ have a ``role``:
   caustic-only photons carry toward the objects' bounding spheres.
 * ``part``: where that flux went; the parts of one side add up to its emitted flux.
   The method: per vertex status (lost, total internal reflection, unconverged,
-  diverged, no exit surface) from the per-vertex records, and the flux on its
+  diverged, no exit surface, re-entered) from the per-vertex records, and the flux on its
   receiver maps (Σ E · texel area) for the splatted vertices. The reference: the
   items of :data:`renderers.mitsuba.photons.BUDGET_ITEMS`, from a separate
   caustic-only trace (:func:`harness.compare.probe.reference_budget`).
@@ -58,6 +58,7 @@ _STATUS_ROWS = (
     ("unconverged", "unconverged: held back by verified hits"),
     ("diverged", "diverged"),
     ("no_exit", "no exit surface found"),
+    ("reentered", "re-entered the object: the two-transmission chain ends"),
 )
 
 

@@ -26,7 +26,9 @@
 // seen at P and |T(P) - P| <= tolerance (u_hit_tolerance, or one positions-map texel
 // at P's distance over |cos| between the light ray and the receiver normal, the
 // cosine clamped at 0.1); otherwise the status is STATUS_UNCONVERGED and the vertex
-// is splatted only with u_splat_unconverged.
+// is splatted only with u_splat_unconverged. With verified hits a closed object's
+// exit ray is also tested for re-entering its object (reenters()): the L T T D chain
+// ends there, so such a vertex is STATUS_REENTERED and not splatted.
 #include "common.glsl"
 
 layout(std430, binding = 0) writeonly buffer Records { vec4 records[]; };
@@ -56,6 +58,7 @@ uniform vec3 u_ior[8];
 uniform vec3 u_absorption[8];   // K_a (1/m)
 uniform vec3 u_reflectance[8];
 uniform int u_fresnel[8];
+uniform float u_extent[8];      // bounding-box diagonal (m): re-entry test length
 uniform int u_channel;          // -1: all channels; c: this pass carries channel c only
 
 uniform int u_paper;            // 1: the paper's Eq. 6 flux, (N.L) / V
@@ -65,6 +68,8 @@ uniform int u_safeguarded;
 uniform int u_exit_iterations;  // refinements of the exit point (double refraction)
 
 const int STATUS_NO_EXIT = 5;   // double refraction found no exit surface
+const int STATUS_REENTERED = 7; // the exit ray enters its object again
+const int REENTRY_STEPS = 48;   // samples of the exit ray over the object's extent
 
 #if defined COMPUTE_SHADER
 layout(local_size_x = 64) in;
@@ -159,6 +164,48 @@ bool find_exit(vec3 v, vec3 r, int object, out float d, out vec3 bn) {
     return true;
 }
 
+// The first surface of `object` the light sees through x in an object atlas
+// (`size` texels per view; nearest texel): its distance from the light along the
+// light ray; false where that texel shows no surface of `object`.
+bool surface_depth(sampler2D positions, int size, vec3 x, int object, out float depth) {
+    int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
+    vec2 ndc;
+    depth = 0.0;
+    if (!project(u_obj_vp[face], x, ndc)) return false;
+    ivec2 t = ivec2(face * size, 0) + min(ivec2(floor((ndc * 0.5 + 0.5) * float(size))),
+                                          ivec2(size - 1));
+    vec4 p = texelFetch(positions, t, 0);
+    depth = light_distance(p.xyz);
+    return abs(p.w - float(object + 1)) < 0.5;
+}
+
+// Whether the exit ray e + s r (s in (0, u_extent[object]]) enters `object` again,
+// as far as the light's images of it show: a sample x of the ray lies inside the
+// object's first slab seen from the light, behind its front surface and before its
+// exit surface at x's texel by a quarter of an object-atlas texel width w at x (the
+// slab's depths are read at texel centres), samples within 2 w of the exit point
+// skipped (there the ray still crosses its own slab's rounded depths). On bunny
+// (grid 128, strong) this drops 66 % of the flux whose exact exit ray meets an
+// object; 3.5 % of what it drops has an exact path to the floor. Entries behind the
+// first slab (a second layer under an overhang, which neither image shows) are not
+// seen.
+bool reenters(vec3 e, vec3 r, int object) {
+    float len = u_extent[object];
+    if (!(len > 0.0)) return false;
+    float view = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z);
+    for (int k = 1; k <= REENTRY_STEPS; ++k) {
+        vec3 x = e + (len * float(k) / float(REENTRY_STEPS)) * r;
+        float margin = view / float(u_grid) * (u_obj_persp == 1 ? length(x - u_light_pos) : 1.0);
+        if (length(x - e) < 2.0 * margin) continue;
+        float front, back, dx = light_distance(x);
+        if (!surface_depth(u_front_positions, u_grid, x, object, front)) continue;
+        if (dx < front + 0.25 * margin) continue;
+        if (surface_depth(u_back_positions, u_back_size, x, object, back) && dx < back - 0.25 * margin)
+            return true;
+    }
+    return false;
+}
+
 void write_record(int base, vec3 v, float view, vec3 r, float d, vec3 p, int status,
                   vec3 flux, float receiver, vec3 normal) {
     records[base + 0] = vec4(v, view);
@@ -245,6 +292,12 @@ void main() {
         v = exit_point;
         r = r2;
         flux *= exp(-u_absorption[object] * inside);  // Eq. 7 inside the solid
+        if (u_verify == 1 && reenters(v, r, object)) {
+            for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
+            write_record(base, v, float(view), r, 0.0, v, STATUS_REENTERED, flux, -1.0,
+                         vec3(0.0));
+            return;
+        }
     }
 
     float d, d_seen;

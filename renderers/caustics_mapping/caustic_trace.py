@@ -33,7 +33,7 @@ __all__ = ["CONVERGED", "ESTIMATORS", "STATUS", "MaterialTable", "Trace", "Trace
 ESTIMATORS = {"modified": 0, "newton": 1, "secant": 2}
 #: Record status codes (``common.glsl`` and ``caustic_trace.glsl``).
 STATUS = {"empty": 0, "hit": 1, "lost": 2, "tir": 3, "diverged": 4, "no_exit": 5,
-          "unconverged": 6}
+          "unconverged": 6, "reentered": 7}
 
 
 @dataclass(frozen=True)
@@ -102,7 +102,9 @@ class MaterialTable:
     """Per-object material uniforms (index = object index).
 
     ``code``: 0 no caustic (diffuse), 1 closed dielectric (double refraction),
-    2 open dielectric (single refraction), 3 conductor (reflection).
+    2 open dielectric (single refraction), 3 conductor (reflection). ``extent``: the
+    diagonal of each object's bounding box (m), the length over which a verified
+    exit ray is tested for re-entering its object (empty: no test).
     """
 
     code: tuple[int, ...]
@@ -110,10 +112,13 @@ class MaterialTable:
     absorption: tuple[tuple[float, float, float], ...]
     reflectance: tuple[tuple[float, float, float], ...]
     fresnel: tuple[int, ...]
+    extent: tuple[float, ...] = ()
 
 
-def material_table(materials, closed: list[bool], effects: tuple[str, ...]) -> MaterialTable:
-    """Build the table from the objects' materials; Fresnel only with the effect."""
+def material_table(materials, closed: list[bool], effects: tuple[str, ...], *,
+                   extent: tuple[float, ...] = ()) -> MaterialTable:
+    """Build the table from the objects' materials; Fresnel only with the effect;
+    ``extent`` the objects' bounding-box diagonals (m), if known."""
     if len(materials) > MAX_OBJECTS:
         raise ValueError(f"at most {MAX_OBJECTS} caustic objects are supported")
     code, ior, absorption, reflectance, fresnel = [], [], [], [], []
@@ -137,7 +142,7 @@ def material_table(materials, closed: list[bool], effects: tuple[str, ...]) -> M
             reflectance.append((0.0,) * 3)
             fresnel.append(0)
     return MaterialTable(tuple(code), tuple(ior), tuple(absorption), tuple(reflectance),
-                         tuple(fresnel))
+                         tuple(fresnel), tuple(float(e) for e in extent))
 
 
 @dataclass(eq=False)
@@ -218,6 +223,8 @@ def run_caustic_trace(
                          ("u_reflectance", materials.reflectance)):
         set_uniform(program, name, np.array(values + ((0.0,) * 3,) * pad, np.float32))
     set_uniform(program, "u_fresnel", np.array(materials.fresnel + (0,) * pad, np.int32))
+    extent = materials.extent or (0.0,) * len(materials.code)
+    set_uniform(program, "u_extent", np.array(extent + (0.0,) * pad, np.float32))
     for name, value in (
         ("u_positions_size", positions.size), ("u_grid", grid),
         ("u_back_size", back_size or grid), ("u_channel", channel),

@@ -121,8 +121,10 @@ def newton_eps(scene: Scene, geometry: SceneGeometry) -> float:
 def scene_setup(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry, *,
                 effects: tuple[str, ...]) -> SceneSetup:
     """Upload the meshes and build what every light sample shares."""
-    materials = material_table([g.material for g in geometry.objects],
-                               [g.mesh.closed for g in geometry.objects], effects)
+    materials = material_table(
+        [g.material for g in geometry.objects], [g.mesh.closed for g in geometry.objects],
+        effects, extent=tuple(float(np.linalg.norm(np.ptp(g.mesh.positions, axis=0)))
+                              for g in geometry.objects))
     return SceneSetup(
         receivers=[upload_mesh(ctx, g.mesh) for g in geometry.receivers],
         objects=[upload_mesh(ctx, g.mesh) for g in geometry.objects],
