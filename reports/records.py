@@ -137,8 +137,8 @@ class SpeedupWithheld:
     short: str = ""
 
 
-#: A paper claim's verdict: it holds or fails by more than twice its standard error,
-#: or the margin is within that (undecided); or it could not be measured.
+#: A paper claim's verdict: its 95 % interval lies within the claim's bound (holds) or
+#: beyond it (does not hold), or straddles it (undecided); or it was not measured.
 CLAIM_VERDICTS = ("holds", "does not hold", "undecided at this noise", "not measured")
 
 

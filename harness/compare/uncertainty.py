@@ -44,12 +44,14 @@ from scipy.special import stdtrit
 
 from harness.metrics import MetricInputError
 from harness.metrics.baselines import (
+    BLOCK,
+    RESAMPLES,
     block_bootstrap,
     flip_map,
     perceptual_baseline,
     ssim_map,
 )
-from harness.metrics.excess import excess_relative_mse
+from harness.metrics.excess import CONFIDENCE, excess_relative_mse
 from reports.display import LUMA
 
 __all__ = ["BASELINE_TRIALS", "ExcessInputs", "metric_excess"]
@@ -57,14 +59,6 @@ __all__ = ["BASELINE_TRIALS", "ExcessInputs", "metric_excess"]
 #: Simulated noisy references per perceptual baseline: SSIM is cheap (0.25 s at 512²
 #: here), FLIP is not (3.7 s at 512², 1.3 s at 256² on this 2-core machine).
 BASELINE_TRIALS = {"ssim": 8, "flip": 4}
-#: Side of the bootstrap's square blocks (texels): larger than SSIM's Gaussian window
-#: (σ = 1.5, 11 × 11) and FLIP's filters at these resolutions, so blocks are nearly
-#: independent.
-BLOCK = 8
-#: Bootstrap resamples.
-RESAMPLES = 400
-#: Two-sided confidence of every interval.
-CONFIDENCE = 0.95
 
 
 @dataclass(frozen=True, eq=False)

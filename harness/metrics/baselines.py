@@ -52,6 +52,12 @@ MetricMap = Callable[[np.ndarray, np.ndarray], np.ndarray]
 WINDOW_SIGMA = 1.5
 #: Normal quantile of the two-sided 95 % interval.
 Z95 = 1.959963984540054
+#: Side of the bootstrap's square blocks (texels): larger than SSIM's Gaussian window
+#: (σ = 1.5, 11 × 11) and FLIP's filters at these resolutions, so blocks are nearly
+#: independent.
+BLOCK = 8
+#: Bootstrap resamples.
+RESAMPLES = 400
 
 
 def ssim_map(*, white: float) -> MetricMap:
@@ -206,8 +212,8 @@ def block_bootstrap(values: np.ndarray, mask: np.ndarray, *, block: int, resampl
 
 
 def perceptual_excess(method, reference, variance, *, metric: MetricMap,
-                      higher_is_better: bool, mask=None, trials: int = 8, block: int = 8,
-                      resamples: int = 400, seed: int = 0,
+                      higher_is_better: bool, mask=None, trials: int = 8, block: int = BLOCK,
+                      resamples: int = RESAMPLES, seed: int = 0,
                       channel_correlation: float = 1.0) -> PerceptualExcess:
     """The method's excess over a perfect method's score, with a block-bootstrap
     interval (module docstring).
