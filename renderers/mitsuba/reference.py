@@ -7,7 +7,8 @@ launch, every launch stratified at its own size), then whole launches. After eac
 round, the per-seed estimates (each seed's sums over its photons so far / those
 photons; every seed traces the same launches) give the mean, the variance of the
 mean and the relative noise per channel in the caustic region the comparison scores
-(:mod:`.noise`). Rounds stop (``stopped_by``):
+(:mod:`.noise`); :class:`ReceiverRounds` keeps these rounds, for this process and for
+a sweep's per-seed tasks alike. Rounds stop (``stopped_by``):
 
 * ``"target_noise"``: the noise (the largest channel's) is at most
   ``settings.target_noise``;
@@ -75,6 +76,7 @@ __all__ = [
     "CUT_WARNING",
     "CutFluxWarning",
     "ReceiverEstimate",
+    "ReceiverRounds",
     "cut_fraction",
     "estimate_receivers",
     "reference_metadata",
@@ -196,6 +198,183 @@ def stop_reason(*, noise: float, target: float, phase: str, elapsed: float, rate
     return why if elapsed + (needed - traced) / rate > cap else None
 
 
+class ReceiverRounds:
+    """The rounds of a reference's receiver maps: each round's per-seed sums in, the
+    estimate, its noise and the stop rule out (see the module docstring).
+
+    One bookkeeping for every way of tracing the rounds: :func:`estimate_receivers`
+    traces them here, seed after seed (:meth:`trace`); the sweep traces the seeds'
+    launches of the starting budget as separate tasks and replays them here
+    (:meth:`add`), then traces the rounds past the budget with :meth:`trace`. So the
+    maps, the noise, the stop and the metadata are one computation.
+
+    Parameters
+    ----------
+    extents : sequence of (float, float, float, float)
+        Each receiver's (u, v) extent.
+    seeds, seed : int
+        Independent seeds K, and the first (seed k is ``seed + k``).
+    budget : int
+        Starting photon budget per seed (per channel pass).
+    batch : int
+        Lanes of a whole launch; the rounds trace :func:`.photons.launch_plan`
+        ``(budget, batch)``, then whole launches.
+    target, cap : float
+        ``target_noise`` and ``reference_time_cap`` (seconds).
+    channel_passes : int
+        Photon-tracer passes per photon: 1, or 3 with dispersion.
+    caustic_only : bool
+        The sums carry only the caustic maps (no ``total``).
+
+    Raises
+    ------
+    ValueError
+        ``budget`` < 1 or ``batch`` out of range (:func:`.photons.launch_plan`).
+    """
+
+    def __init__(self, *, extents, seeds: int, seed: int, budget: int, batch: int,
+                 target: float, cap: float, channel_passes: int,
+                 caustic_only: bool) -> None:
+        self.extents = tuple(tuple(e) for e in extents)
+        self.seeds, self.seed = int(seeds), int(seed)
+        self.budget, self.batch = int(budget), int(batch)
+        # One launch per seed per round: the starting budget's launches, then whole ones.
+        self.plan = launch_plan(budget, batch)
+        self.target, self.cap = float(target), float(cap)
+        self.channel_passes = int(channel_passes)
+        self.caustic_only = bool(caustic_only)
+        n_rec = len(self.extents)
+        self._caustic = [[0.0] * n_rec for _ in range(self.seeds)]
+        self._total = [[0.0] * n_rec for _ in range(self.seeds)]
+        self._emitted, self._cut = np.zeros(3), np.zeros(3)
+        self.photons = 0
+        self.history: list[tuple[int, float, float]] = []
+        self.noise = float("nan")
+        self.per_channel = np.full(3, np.nan)
+        self.region_texels: tuple[int, ...] = (0,) * n_rec
+        self.stopped_by: str | None = None
+        self._maps: list[ReceiverMap] = []
+        self._caustic_maps: list[ReceiverMap] = []
+
+    @property
+    def rounds(self) -> int:
+        """Rounds added so far; the next round's launches use PCG32 stream ``rounds``."""
+        return len(self.history)
+
+    @property
+    def lanes(self) -> int:
+        """Lanes of the next round's launch (per seed): the plan's, then ``batch``."""
+        return self.plan[self.rounds] if self.rounds < len(self.plan) else self.batch
+
+    @property
+    def phase(self) -> str:
+        """The stop rule's phase after the rounds so far (:func:`stop_reason`)."""
+        return ("budget" if self.rounds < len(self.plan)
+                else "spent" if self.rounds == len(self.plan) else "extended")
+
+    def add(self, caustic, *, total=None, photons: int, emitted, cut, elapsed: float,
+            seconds: float) -> str | None:
+        """Add one round; its stop reason (``stopped_by``), or None to trace another.
+
+        Parameters
+        ----------
+        caustic : sequence (K) of sequence (receivers) of ndarray
+            Per seed, per receiver, the round's unnormalised caustic sums (float64,
+            (H, W, 3), W/m² x photons: :attr:`.photons.PhotonSums.caustic`).
+        total : same, or None
+            The total sums (:attr:`.photons.PhotonSums.total`); None with
+            ``caustic_only``.
+        photons : int
+            Photons per seed this round (per channel pass).
+        emitted, cut : sequence (K) of ndarray (3,)
+            Per seed, the round's emitted and cut-off flux (RGB, W x photons).
+        elapsed : float
+            Seconds from the start of the rounds to the end of this one (recorded in
+            the history; the stop rule's time).
+        seconds : float
+            Seconds this round's K launches take when traced one after another: the
+            rate the stop rule projects the rounds past the budget with is
+            ``photons / seconds`` (photons per seed per second).
+
+        Raises
+        ------
+        ValueError
+            Not K seeds of sums, or a round added after the stop.
+        """
+        if self.stopped_by is not None:
+            raise ValueError(f"the rounds stopped ({self.stopped_by}): no round to add")
+        if {len(caustic), len(emitted), len(cut)} != {self.seeds}:
+            raise ValueError(f"a round has the sums of {self.seeds} seeds, got "
+                             f"{len(caustic)} maps, {len(emitted)} emitted, {len(cut)} cut")
+        n_rec = len(self.extents)
+        for i in range(self.seeds):
+            for r in range(n_rec):
+                if not self.caustic_only:
+                    self._total[i][r] = self._total[i][r] + total[i][r]
+                self._caustic[i][r] = self._caustic[i][r] + caustic[i][r]
+        # The cut fraction is over every seed's photons.
+        self._emitted += np.sum(emitted, axis=0)
+        self._cut += np.sum(cut, axis=0)
+        traced = self.photons = self.photons + int(photons)
+        channels, maps, caustic_maps, counts = [], [], [], []
+        for r in range(n_rec):
+            cmean, cvar = seed_statistics(np.stack([c[r] for c in self._caustic]) / traced)
+            # Noise of what is compared: the caustic map, per channel, over the
+            # region the comparison scores.
+            region = caustic_region(cmean)
+            counts.append(int(region.sum()))
+            channels.append(relative_noise_per_channel(cmean, cvar, region))
+            if not self.caustic_only:
+                mean, var = seed_statistics(np.stack([t[r] for t in self._total]) / traced)
+                maps.append(ReceiverMap(mean.astype(np.float32), self.extents[r],
+                                        var.astype(np.float32)))
+            caustic_maps.append(ReceiverMap(cmean.astype(np.float32), self.extents[r],
+                                            cvar.astype(np.float32)))
+        self._maps, self._caustic_maps = maps, caustic_maps
+        self.per_channel, self.region_texels = _largest(channels), tuple(counts)
+        finite = self.per_channel[np.isfinite(self.per_channel)]
+        self.noise = float(finite.max()) if finite.size else float("nan")
+        self.history.append((traced, self.noise, float(elapsed)))
+        self.stopped_by = stop_reason(noise=self.noise, target=self.target, phase=self.phase,
+                                      elapsed=elapsed, rate=photons / max(seconds, 1e-9),
+                                      traced=traced, cap=self.cap)
+        return self.stopped_by
+
+    def trace(self, tracer: PhotonTracer, *, start: float) -> str | None:
+        """Trace the next round with ``tracer``, seed after seed (seed ``seed + k``,
+        stream :attr:`rounds`, one launch of :attr:`lanes` lanes stratified at its
+        own size), and :meth:`add` it; ``start``: the ``time.perf_counter()`` the
+        elapsed time counts from."""
+        n, stream = self.lanes, self.rounds
+        began = time.perf_counter()
+        traced = [tracer.trace(n, seed=self.seed + i, stream=stream, batch=n)
+                  for i in range(self.seeds)]
+        now = time.perf_counter()
+        return self.add([t.caustic for t in traced],
+                        total=None if self.caustic_only else [t.total for t in traced],
+                        photons=traced[0].photons, emitted=[t.emitted for t in traced],
+                        cut=[t.cut for t in traced], elapsed=now - start,
+                        seconds=now - began)
+
+    @property
+    def cut_fraction(self) -> float:
+        """Largest fraction, over RGB, of the emitted flux the safety cap cut off."""
+        return cut_fraction(self._emitted, self._cut)
+
+    def estimate(self) -> ReceiverEstimate:
+        """The estimate after the rounds so far (:class:`ReceiverEstimate`)."""
+        if not self.history:
+            raise ValueError("no round traced yet")
+        return ReceiverEstimate(
+            maps=None if self.caustic_only else tuple(self._maps),
+            caustic=tuple(self._caustic_maps), photons=self.photons,
+            relative_noise=self.noise, stopped_by=self.stopped_by or "budget",
+            history=tuple(self.history), seeds=self.seeds, seed=self.seed,
+            channel_passes=self.channel_passes, cut_fraction=self.cut_fraction,
+            relative_noise_per_channel=tuple(float(x) for x in self.per_channel),
+            region_texels=self.region_texels, budget=self.budget, time_cap=self.cap)
+
+
 def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int | None = None,
                        seed: int | None = None, target_noise: float | None = None,
                        time_cap: float | None = None,
@@ -203,88 +382,41 @@ def estimate_receivers(scene: Scene, *, photons: int | None = None, seeds: int |
                        batch: int = DEFAULT_BATCH, progress: bool = False,
                        caustic_only: bool = False) -> ReceiverEstimate:
     """Trace receiver maps with K seeds until the noise target, the budget or the
-    time cap (see the module docstring).
+    time cap (see the module docstring), in one process: the rounds of
+    :class:`ReceiverRounds`, each seed's launch after the other's.
 
     Parameters default to ``scene.settings`` (``photons``: the starting budget per
     seed, always traced unless the target is met first; ``time_cap``:
     ``reference_time_cap``). ``batch``: the lanes of a whole launch.
     ``caustic_only`` traces only the caustic maps (see :class:`.PhotonTracer`:
     every photon is aimed at the caustic objects, none at the receivers; same
-    expectation, less noise per photon); ``maps`` is then None.
+    expectation, less noise per photon); ``maps`` is then None. The elapsed time
+    counts from before the tracer is built (its JIT compilation included).
     """
     s = scene.settings
     budget = photons if photons is not None else s.photons
-    k = seeds if seeds is not None else s.seeds
-    first = seed if seed is not None else s.seed
-    target = target_noise if target_noise is not None else s.target_noise
-    cap = float(time_cap if time_cap is not None else s.reference_time_cap)
     start = time.perf_counter()
     tracer = PhotonTracer(scene, resolution=resolution, extents=extents,
                           caustic_only=caustic_only)
-    # One launch per seed per round: the starting budget's launches, then whole ones.
-    planned = launch_plan(budget, batch)
-    n_rec = len(tracer.extents)
-    sums_total = [[0.0] * n_rec for _ in range(k)]
-    sums_caustic = [[0.0] * n_rec for _ in range(k)]
-    traced, history, noise, stopped = 0, [], float("nan"), "budget"
-    per_channel, texels = np.full(3, np.nan), (0,) * n_rec
-    emitted, cut = np.zeros(3), np.zeros(3)
-    maps, caustic = [], []
-    with _progress(budget, f"photons ({k} seeds)", progress) as bar:
-        stream = 0
+    rounds = ReceiverRounds(
+        extents=tracer.extents, seeds=seeds if seeds is not None else s.seeds,
+        seed=seed if seed is not None else s.seed, budget=budget, batch=batch,
+        target=target_noise if target_noise is not None else s.target_noise,
+        cap=float(time_cap if time_cap is not None else s.reference_time_cap),
+        channel_passes=len(tracer.channels), caustic_only=caustic_only)
+    with _progress(budget, f"photons ({rounds.seeds} seeds)", progress) as bar:
         while True:
-            n = planned[stream] if stream < len(planned) else batch
-            round_start = time.perf_counter()
-            for i in range(k):
-                sums = tracer.trace(n, seed=first + i, stream=stream, batch=n)
-                for r in range(n_rec):
-                    if not caustic_only:
-                        sums_total[i][r] = sums_total[i][r] + sums.total[r]
-                    sums_caustic[i][r] = sums_caustic[i][r] + sums.caustic[r]
-            traced += sums.photons
-            emitted += sums.emitted
-            cut += sums.cut
-            stream += 1
-            channels, maps, caustic, counts = [], [], [], []
-            for r in range(n_rec):
-                cmean, cvar = seed_statistics(np.stack([c[r] for c in sums_caustic]) / traced)
-                # Noise of what is compared: the caustic map, per channel, over the
-                # region the comparison scores.
-                region = caustic_region(cmean)
-                counts.append(int(region.sum()))
-                channels.append(relative_noise_per_channel(cmean, cvar, region))
-                if not caustic_only:
-                    mean, var = seed_statistics(np.stack([t[r] for t in sums_total]) / traced)
-                    maps.append(ReceiverMap(mean.astype(np.float32), tracer.extents[r],
-                                            var.astype(np.float32)))
-                caustic.append(ReceiverMap(cmean.astype(np.float32), tracer.extents[r],
-                                           cvar.astype(np.float32)))
-            per_channel, texels = _largest(channels), tuple(counts)
-            finite = per_channel[np.isfinite(per_channel)]
-            noise = float(finite.max()) if finite.size else float("nan")
-            now = time.perf_counter()
-            history.append((traced, noise, now - start))
+            lanes = rounds.lanes
+            why = rounds.trace(tracer, start=start)
             if bar is not None:
-                bar.total = max(bar.total, traced)
-                bar.update(sums.photons)
-                bar.set_postfix(noise=f"{noise:.4f}")
-            phase = ("budget" if stream < len(planned)
-                     else "spent" if stream == len(planned) else "extended")
-            why = stop_reason(noise=noise, target=target, phase=phase, elapsed=now - start,
-                              rate=sums.photons / max(now - round_start, 1e-9),
-                              traced=traced, cap=cap)
+                bar.total = max(bar.total, rounds.photons)
+                bar.update(lanes)
+                bar.set_postfix(noise=f"{rounds.noise:.4f}")
             if why is not None:
-                stopped = why
                 break
-    cut = cut_fraction(emitted, cut)
-    _warn_cut(scene, cut, "emitted caustic flux", tracer.max_events)
-    return ReceiverEstimate(maps=None if caustic_only else tuple(maps), caustic=tuple(caustic),
-                            photons=traced, relative_noise=noise, stopped_by=stopped,
-                            history=tuple(history), seeds=k, seed=first,
-                            channel_passes=len(tracer.channels),
-                            cut_fraction=cut,
-                            relative_noise_per_channel=tuple(float(x) for x in per_channel),
-                            region_texels=texels, budget=int(budget), time_cap=cap)
+    estimate = rounds.estimate()
+    _warn_cut(scene, estimate.cut_fraction, "emitted caustic flux", tracer.max_events)
+    return estimate
 
 
 def _largest(channels: list[np.ndarray]) -> np.ndarray:
@@ -298,18 +430,16 @@ def _largest(channels: list[np.ndarray]) -> np.ndarray:
     return out
 
 
-def reference_metadata(scene: Scene, *, key: str, versions: dict, photons: int,
-                       channel_passes: int, relative_noise: float, stopped_by: str,
-                       history, cut_fraction: float, camera_cut: float,
-                       camera_variance: np.ndarray, lookup: LookupPlan | None = None,
-                       relative_noise_per_channel=None,
-                       region_texels: tuple[int, ...] | None = None) -> dict:
+def reference_metadata(scene: Scene, estimate: ReceiverEstimate, *, key: str, versions: dict,
+                       camera_cut: float, camera_variance: np.ndarray,
+                       lookup: LookupPlan | None = None) -> dict:
     """A reference's ``metadata`` (``result.json``): what was traced and how, with
-    ``hash`` = ``key``. ``history`` holds (photons, noise, seconds) per round;
-    ``photons`` the photons per seed traced, ``photon_budget`` the starting budget.
-    ``relative_noise`` is the largest channel's; ``relative_noise_per_channel``
-    (R, G, B) and ``region_texels`` (texels of each receiver's caustic region) are
-    recorded when given (None: not measured by the caller).
+    ``hash`` = ``key``. The receiver maps' part comes from ``estimate`` (however its
+    rounds were traced: :class:`ReceiverRounds`): ``photons`` the photons per seed
+    traced, ``photon_budget`` the starting budget, ``noise_history`` (photons, noise,
+    seconds) per round, ``relative_noise`` the largest channel's,
+    ``relative_noise_per_channel`` (R, G, B) and ``noise_region_texels`` (texels of
+    each receiver's caustic region), ``stopped_by``, ``cut_flux_fraction``.
 
     The camera image is ptracer's unless ``lookup`` (the camera tracer's lookup maps)
     is given. ``camera_cut``: ptracer, :func:`.camera.camera_cut_fraction`'s share of
@@ -341,22 +471,21 @@ def reference_metadata(scene: Scene, *, key: str, versions: dict, photons: int,
         "hash": key,
         "variant": versions["variant"],
         "versions": versions,
-        "photons": photons,
+        "photons": estimate.photons,
         "photon_budget": s.photons,
-        "channel_passes": channel_passes,
+        "channel_passes": estimate.channel_passes,
         "spp": s.spp,
         "seed": s.seed,
         "seeds": s.seeds,
-        "relative_noise": relative_noise,
-        "relative_noise_per_channel": (None if relative_noise_per_channel is None
-                                       else [float(x) for x in relative_noise_per_channel]),
-        "noise_region_texels": None if region_texels is None else list(region_texels),
+        "relative_noise": estimate.relative_noise,
+        "relative_noise_per_channel": [float(x) for x in estimate.relative_noise_per_channel],
+        "noise_region_texels": list(estimate.region_texels),
         "target_noise": s.target_noise,
         "reference_time_cap": s.reference_time_cap,
-        "stopped_by": stopped_by,
-        "noise_history": [list(h) for h in history],
+        "stopped_by": estimate.stopped_by,
+        "noise_history": [list(h) for h in estimate.history],
         "event_chains": event_chains_counted(scene),
-        "cut_flux_fraction": cut_fraction,
+        "cut_flux_fraction": estimate.cut_fraction,
         "max_specular_events": MAX_SPECULAR_EVENTS,
         # All-paths mode: Russian roulette past this many events, survival probability.
         "roulette_from": ROULETTE_FROM,
@@ -414,13 +543,9 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict,
         image, camera_var, camera_cut = _ptracer_camera(scene, geometry, progress=progress,
                                                         timings=timings)
     _warn_cut(scene, camera_cut, "camera image", CAMERA_MAX_EVENTS)
-    metadata = reference_metadata(
-        scene, key=key, versions=versions, photons=est.photons,
-        channel_passes=est.channel_passes, relative_noise=est.relative_noise,
-        stopped_by=est.stopped_by, history=est.history, cut_fraction=est.cut_fraction,
-        camera_cut=camera_cut, camera_variance=camera_var, lookup=lookup,
-        relative_noise_per_channel=est.relative_noise_per_channel,
-        region_texels=est.region_texels)
+    metadata = reference_metadata(scene, est, key=key, versions=versions,
+                                  camera_cut=camera_cut, camera_variance=camera_var,
+                                  lookup=lookup)
     return RenderResult(
         renderer="mitsuba", camera=image.astype(np.float32), receivers=tuple(est.caustic),
         effects=effects_of(scene), timings=timings, timer=TIMER, metadata=metadata,

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from renderers.mitsuba.reference import estimate_receivers, stop_reason
+from renderers.mitsuba.reference import ReceiverRounds, estimate_receivers, stop_reason
 from tests.renderers.mitsuba.scenes import glass_sphere, make_scene
 
 POINT = 'type = "point"\nposition = [0.3, 0.0, 6.0]\nintensity = [30.0, 30.0, 30.0]'
@@ -92,3 +92,47 @@ def test_the_stop_rule(phase, elapsed, expected):
         assert stop_reason(noise=np.nan, phase=phase, elapsed=1.0, **args) == reason
         assert stop_reason(noise=0.02, phase=phase, elapsed=1.0,
                            **{**args, "target": 0.0}) == reason
+
+
+def _round(factors: np.ndarray, photons: int, *, shape=(4, 4)):
+    """Per seed, one receiver's caustic sums: photons x (1, 2, 4) W/m² x factor[k, c]
+    in every texel (a uniform map, so its whole area is the caustic region)."""
+    base = np.array([1.0, 2.0, 4.0])
+    return [[np.broadcast_to(photons * base * f, (*shape, 3)).copy()] for f in factors]
+
+
+def test_rounds_noise_stop_and_cut_fraction_from_per_seed_sums():
+    """Regression lock on the shared bookkeeping (the single process and the sweep's
+    merge both feed it): two seeds whose estimates are (1 - d_c) and (1 + d_c) times
+    the mean have a variance of the mean s^2 / 2 = (d_c m_c)^2, so each channel's
+    relative noise is d_c = (0.1, 0.2, 0.05), the largest 0.2, over all 16 texels.
+    A budget of 5 in launches of 2 is rounds of 2, 2, 1 photons: the first two go on
+    (budget phase), the last stops at the budget (a 1e-3 target needs 40 000 x the
+    photons, far past the 1 s cap). The cut fraction is over both seeds' flux: 1 cut
+    of 10 emitted per seed per round, three rounds, is 1 / 60 (the last seed's alone,
+    1 / 30). A round after the stop is refused."""
+    d = np.array([0.1, 0.2, 0.05])
+    factors = np.stack([1 - d, 1 + d])
+    rounds = ReceiverRounds(extents=[(0.0, 1.0, 0.0, 1.0)], seeds=2, seed=3, budget=5,
+                            batch=2, target=1e-3, cap=1.0, channel_passes=1,
+                            caustic_only=True)
+    assert rounds.plan == (2, 2, 1)
+    emitted, cut = [np.full(3, 10.0)] * 2, [np.zeros(3), np.array([1.0, 0.0, 0.0])]
+    reasons = []
+    for step in range(3):
+        n = rounds.lanes
+        reasons.append(rounds.add(_round(factors, n), photons=n, emitted=emitted,
+                                  cut=cut if step == 0 else [np.zeros(3)] * 2,
+                                  elapsed=0.1 * (step + 1), seconds=0.1))
+    assert reasons == [None, None, "budget"]
+    est = rounds.estimate()
+    assert est.photons == 5 and est.stopped_by == "budget" and est.seed == 3
+    np.testing.assert_allclose(est.relative_noise_per_channel, d, rtol=1e-12)
+    assert est.relative_noise == pytest.approx(0.2, rel=1e-12)
+    assert est.region_texels == (16,)
+    np.testing.assert_allclose(est.caustic[0].irradiance, np.broadcast_to([1, 2, 4], (4, 4, 3)))
+    assert [h[0] for h in est.history] == [2, 4, 5]
+    assert est.cut_fraction == pytest.approx(1 / 60, rel=1e-12)
+    with pytest.raises(ValueError, match="stopped"):
+        rounds.add(_round(factors, 2), photons=2, emitted=emitted, cut=cut, elapsed=1.0,
+                   seconds=0.1)
