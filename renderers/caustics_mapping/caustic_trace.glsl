@@ -85,11 +85,65 @@ bool receiver_at(vec3 x, out vec4 t, out vec3 n) {
                            u_filtered == 1, x, t, n);
 }
 
+// T(x) beyond a receiver's edge (filtered lookups): where x's positions-atlas texel
+// shows no receiver but one of the texels within EDGE_TEXELS of it (rings of growing
+// Chebyshev radius, nearest first) does, T(x) is where the light ray through x meets
+// that texel's tangent plane (position and normal), tagged with its receiver. A
+// receiver ends between its last texel centre and the next, and a refracted ray
+// near the edge starts from the light ray through the vertex, which may pass the
+// edge by more than a texel (water_pool: 4.5 cm, the sun's slant minus the refracted
+// ray's, over 1 m of water): without this those vertices were lost (2.1 % of the
+// flux on water_pool). Whether the hit is on the receiver is the receiver map's
+// question (receiver_splat.glsl drops hits outside its (u, v) domain).
+const int EDGE_TEXELS = 4;
+bool receiver_beyond_edge(vec3 x, out vec4 t, out vec3 n) {
+    t = vec4(0.0);
+    n = vec3(0.0);
+    int face = u_map_cube == 1 ? cube_face(x - u_light_pos) : 0;
+    if (u_map_slot[face] < 0) return false;
+    vec4 c = u_map_vp[face] * vec4(x, 1.0);
+    if (!(c.w > 0.0)) return false;
+    int size = u_positions_size;
+    ivec2 centre = ivec2(floor((c.xy / c.w * 0.5 + 0.5) * float(size)));
+    ivec2 base = ivec2(u_map_slot[face] * size, 0);
+    vec3 l = incident_dir(x);
+    for (int ring = 1; ring <= EDGE_TEXELS; ++ring) {
+        float best = 1e30;
+        for (int dy = -ring; dy <= ring; ++dy) {
+            for (int dx = -ring; dx <= ring; ++dx) {
+                if (max(abs(dx), abs(dy)) != ring) continue;
+                ivec2 k = centre + ivec2(dx, dy);
+                if (any(lessThan(k, ivec2(0))) || any(greaterThanEqual(k, ivec2(size)))) continue;
+                vec4 p = texelFetch(u_receiver_positions, base + k, 0);
+                if (p.w < 0.5) continue;
+                vec3 m = texelFetch(u_receiver_normals, base + k, 0).xyz;
+                float cos_l = dot(l, m);
+                if (abs(cos_l) < 1e-3) continue;
+                float s = dot(p.xyz - x, m) / cos_l;
+                float dist = float(dx * dx + dy * dy);
+                if (dist < best) {
+                    best = dist;
+                    t = vec4(x + s * l, p.w);
+                    n = m;
+                }
+            }
+        }
+        if (best < 1e30) return true;
+    }
+    return false;
+}
+
+// T(x) and n (receiver_at), extrapolated past a receiver's edge with filtered lookups.
+bool receiver_or_edge(vec3 x, out vec4 t, out vec3 n) {
+    if (receiver_at(x, t, n)) return true;
+    return u_filtered == 1 && receiver_beyond_edge(x, t, n);
+}
+
 // The estimators' surface 0 is the receiver positions atlas; each update's estimate
 // goes to the vertex's history (its first float at `record`).
 bool surface_at(int surface, vec3 x, out vec4 t) {
     vec3 n;
-    return receiver_at(x, t, n);
+    return receiver_or_edge(x, t, n);
 }
 
 void estimate_record(int record, int k, float d) {
@@ -309,7 +363,7 @@ void main() {
     if (status == STATUS_HIT) {
         vec4 t;
         vec3 n_seen;
-        bool seen = receiver_at(p, t, n_seen);
+        bool seen = receiver_or_edge(p, t, n_seen);
         if (seen) {
             receiver = t.w - 1.0;
             normal = n_seen;
