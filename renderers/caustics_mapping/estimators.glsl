@@ -25,8 +25,12 @@
 // that saw the surface. An update that is non-finite, leaves the bracket (or, with no
 // upper end yet, goes past twice the modified update's distance max(g, lo): a trust
 // region), or oscillates (reverses direction without at least halving the step, from
-// the last two estimates) is replaced by bisection of the bracket (or by the modified
-// step while no upper end is known).
+// the last two estimates) is replaced by the false-position point of the bracket
+// where both ends' residuals are known (inside the bracket, and next to the end with
+// the smaller |h|), else by its bisection (or by the modified step while no upper end
+// is known). Bisection threw good estimates away: h is piecewise smooth (bilinear
+// reads; kinks at texel borders), a secant across a kink reverses, and halving a
+// bracket [0, hi] whose hi is within a hundredth of a texel of the root undid it.
 // Unsafeguarded, a non-finite update ends the iterations as STATUS_DIVERGED; a lookup
 // that sees no surface ends them as STATUS_LOST. The estimate is then kept, and
 // recorded again for each remaining update.
@@ -83,6 +87,8 @@ int estimate_along(int surface, vec3 v, vec3 r, float start, int estimator, bool
         d_seen = 0.0;
     }
     float lo = 0.0, hi = -1.0;       // bracket of the root of h; hi < 0: no upper end yet
+    float h_lo = h_prev, h_hi = 0.0; // h at the bracket's ends, where known
+    bool lo_known = have_prev, hi_known = false;
     int status = STATUS_HIT;
     estimate_record(record, 0, d);
     int k = 1;
@@ -94,7 +100,7 @@ int estimate_along(int surface, vec3 v, vec3 r, float start, int estimator, bool
             // forward again is caught as oscillation (secant restarts: h there is
             // unknown).
             if (safeguarded && d_seen >= 0.0) {
-                hi = hi < 0.0 ? d : min(hi, d);
+                if (hi < 0.0 || d < hi) { hi = d; hi_known = false; }
                 d_prev = d;
                 have_prev = false;
                 d = 0.5 * (d_seen + d);
@@ -107,7 +113,11 @@ int estimate_along(int surface, vec3 v, vec3 r, float start, int estimator, bool
         d_seen = d;
         float h = g - d;
         if (abs(h) <= ESTIMATE_TOLERANCE(v + d * r)) break;   // converged: d is kept
-        if (h >= 0.0) lo = max(lo, d); else hi = hi < 0.0 ? d : min(hi, d);
+        if (h >= 0.0) {
+            if (d >= lo) { lo = d; h_lo = h; lo_known = true; }
+        } else if (hi < 0.0 || d <= hi) {
+            hi = d; h_hi = h; hi_known = true;
+        }
         float prop = d;
         bool finite = true;
         if (h == 0.0) {
@@ -138,7 +148,12 @@ int estimate_along(int surface, vec3 v, vec3 r, float start, int estimator, bool
             bool osc = k >= 2 && (prop - d) * (d - d_prev) < 0.0
                 && abs(prop - d) >= 0.5 * abs(d - d_prev);
             bool outside = prop < lo || (hi >= 0.0 ? prop > hi : prop > 2.0 * max(g, lo));
-            if (!finite || osc || outside) prop = hi >= 0.0 ? 0.5 * (lo + hi) : g;
+            if (!finite || osc || outside) {
+                if (hi < 0.0) prop = g;
+                else if (lo_known && hi_known && h_lo > h_hi)
+                    prop = lo + h_lo * (hi - lo) / (h_lo - h_hi);   // false position
+                else prop = 0.5 * (lo + hi);
+            }
         } else if (!finite) {
             status = STATUS_DIVERGED;
             break;

@@ -212,6 +212,9 @@ def estimate_distances(
     h_prev = np.where(have_prev, d, _F(0)).astype(_F)
     lo = np.zeros(k_count, _F)
     hi = np.full(k_count, _F(-1))
+    # h at the bracket's ends, NaN where unknown (h(0) = g(0) with the receiver start).
+    h_lo = np.where(have_prev, d, np.nan).astype(_F)
+    h_hi = np.full(k_count, np.nan, _F)
     hist[:, 0] = d
     seen = np.full(k_count, _F(-1) if start == "fixed" else _F(0))
     converged_at = np.zeros(k_count, bool)     # iterations ended at a converged estimate
@@ -223,7 +226,9 @@ def estimate_distances(
             # An estimate that sees no receiver overshot its edge: halfway back to
             # the last one that saw one (caustic_trace.glsl).
             back = missed & (seen >= 0)
-            hi = np.where(back, np.where(hi < 0, d, np.minimum(hi, d)), hi)
+            new_hi = back & ((hi < 0) | (d < hi))
+            hi = np.where(new_hi, d, hi)
+            h_hi = np.where(new_hi, _F(np.nan), h_hi)
             d_prev = np.where(back, d, d_prev)
             have_prev &= ~back
             d = np.where(back, _F(0.5) * (seen + d), d).astype(_F)
@@ -241,8 +246,12 @@ def estimate_distances(
         done = active & (np.abs(h) <= tol)
         converged_at |= done
         active &= ~done
-        lo = np.where(active & (h >= 0), np.maximum(lo, d), lo)
-        hi = np.where(active & (h < 0), np.where(hi < 0, d, np.minimum(hi, d)), hi)
+        new_lo = active & (h >= 0) & (d >= lo)
+        lo = np.where(new_lo, d, lo)
+        h_lo = np.where(new_lo, h, h_lo)
+        new_hi = active & (h < 0) & ((hi < 0) | (d <= hi))
+        hi = np.where(new_hi, d, hi)
+        h_hi = np.where(new_hi, h, h_hi)
         finite = np.ones(k_count, bool)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             if estimator == "modified":
@@ -278,7 +287,13 @@ def estimate_distances(
             outside = (prop < lo) | np.where(hi >= 0, prop > hi,
                                              prop > _F(2) * np.maximum(g, lo))
             fallback = ~finite | osc | outside
-            prop = np.where(fallback, np.where(hi >= 0, _F(0.5) * (lo + hi), g), prop)
+            # The bracket's false-position point where both ends' h are known, else
+            # its midpoint (estimators.glsl).
+            known = np.isfinite(h_lo) & np.isfinite(h_hi) & (h_lo > h_hi)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                falsi = (lo + h_lo * (hi - lo) / np.where(known, h_lo - h_hi, 1)).astype(_F)
+            inner = np.where(known, falsi, _F(0.5) * (lo + hi))
+            prop = np.where(fallback, np.where(hi >= 0, inner, g), prop)
         else:
             status = np.where(active & ~finite, DIVERGED, status)
             active &= finite
