@@ -16,34 +16,20 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
-from harness.checks import GOLDEN_DIR, KINDS, LOCKS_FILE
-from harness.checks.run import count_by_kind, load_check_files
+from harness.api import DEFAULT_METHODS, OptionError
+from harness.api import compare as compare_scenes
+from harness.checks import KINDS
+from harness.checks.run import count_by_kind
 from harness.commands.scene import load_scenes
-from harness.compare.isolation import load_failure, run_scene, write_failure
-from harness.compare.pipeline import (
-    CheckOptions,
-    CompareOptions,
-    CrossCheckOptions,
-    default_studies,
-    known_studies,
-    run_comparison,
-)
-from harness.compare.staging import staged_output
+from harness.compare.pipeline import CompareOptions, default_studies, known_studies
 from harness.terminal import markup, plain
 from harness.writable import usable_cache
-from renderers.methods import load_method
 from renderers.mitsuba.cache import cache_dir
-from reports import scene_folder
-from reports.build import write_index
 from reports.records import SceneFailure
 from scenes import Scene, SceneError, default_scene_path, parse_override, with_settings
 
 __all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "compare_options", "headline_lines",
            "print_summary", "summary_rows"]
-
-#: Methods compared when none is named: both caustics-mapping presets.
-DEFAULT_METHODS = ("paper", "strong")
-
 
 def summary_rows(comparisons) -> list[tuple[str, ...]]:
     """One row per scene: the key numbers of the one-screen summary (plain text: the
@@ -189,36 +175,22 @@ def compare(args: argparse.Namespace) -> int:
               "(e.g. --studies temporal)", file=sys.stderr)
         return 2
     names = [*(args.preset or []), *(args.method or [])] or list(DEFAULT_METHODS)
-    methods = [load_method(name) for name in dict.fromkeys(names)]
-    # Every file is read before anything renders: a missing one is an error naming it.
-    checks = CheckOptions(
-        files=load_check_files(Path(args.locks) if args.locks else LOCKS_FILE),
-        golden_dir=Path(args.golden) if args.golden else GOLDEN_DIR)
-    crosscheck = (CrossCheckOptions(photons=args.crosscheck_photons) if args.crosscheck
-                  else None)
-    options = compare_options(args, studies)
-
-    items, rows, taken = [], [], []
-    with staged_output(args.output) as out_dir:
-        for (source, scene), method in ((pair, method) for pair in scenes for method in methods):
-            if isinstance(scene, SceneError):  # did not validate: its own row, no render
-                failure = load_failure(source, method.name, scene)
-                folder = scene_folder(failure.page, taken=taken)
-                item, row = failure, write_failure(out_dir, folder, failure,
-                                                   self_contained=args.self_contained)
-            else:
-                folder = scene_folder(f"{scene.name}-{method.name}", taken=taken)
-                item, row = run_scene(
-                    out_dir, folder, scene, method.name,
-                    lambda s=scene, m=method: run_comparison(
-                        s, m, options=options, checks=checks, crosscheck=crosscheck),
-                    self_contained=args.self_contained)
-            taken.append(folder)
-            items.append(item)
-            rows.append(row)
-        write_index(out_dir, rows, self_contained=args.self_contained)
+    try:
+        result = compare_scenes(
+            [scene if isinstance(scene, Scene) else source for source, scene in scenes],
+            names, studies=studies, quick=args.quick, settings=overrides,
+            cache_dir=args.cache_dir, use_cache=not args.no_cache, locks=args.locks,
+            golden_dir=args.golden, max_iterations=args.max_iterations,
+            frames=getattr(args, "frames", None),
+            crosscheck_photons=args.crosscheck_photons if args.crosscheck else None,
+            output=args.output, self_contained=args.self_contained,
+            progress=not args.quiet, isolate=True)
+    except OptionError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    items = result.records
     print_summary(items, Path(args.output), time.perf_counter() - start)
-    if any(isinstance(item, SceneFailure) for item in items):
+    if result.failures:
         return 1
     failed = [c for item in items for c in item.failed_checks]
     return 3 if failed and args.fail_on_checks else 0

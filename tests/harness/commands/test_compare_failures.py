@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 import re
 
-import harness.commands.compare as command
+import harness.api as command  # `caustics compare` runs each comparison through the API
 from harness.cli import main
 from tests.conftest import SCENES
 from tests.harness.commands.test_compare import SMALL
