@@ -37,7 +37,7 @@ from harness.checks.stability import convergence_outcomes
 from harness.compare.headlines import with_headlines
 from harness.compare.provenance import provenance
 from harness.compare.scoring import References, require_caustic, score_render
-from harness.compare.studies import StudyContext, registered_studies
+from harness.compare.studies import Study, StudyContext, registered_studies
 from harness.compare.timed import TimedRender, timed_render
 from harness.crosscheck import run_crosscheck
 from harness.studies.runner import RealtimeRunner
@@ -163,14 +163,12 @@ def _runner(scene: Scene, method: Method, repeats: int, needed: bool
         yield runner
 
 
-def _studies(context: StudyContext) -> dict[str, Section]:
-    """Run each selected study that applies, in registration order."""
-    selected = set(context.options.selected)
-    for study in registered_studies():
-        if study.name in selected and study.applies(context.method):
-            section = study.run(context)
-            if section is not None:
-                context.sections[section.name] = section
+def _studies(context: StudyContext, studies: list[Study]) -> dict[str, Section]:
+    """Run ``studies`` in order; each sees the sections of those before it."""
+    for study in studies:
+        section = study.run(context)
+        if section is not None:
+            context.sections[section.name] = section
     return context.sections
 
 
@@ -219,7 +217,7 @@ def run_comparison(scene: Scene, method: Method, *,
         render = render or timed_render(method, scene, repeats=options.repeats, runner=runner)
         scored = score_render(scene, geometry, render, references)
         sections = _studies(StudyContext(scene, method, geometry, render, references, scored,
-                                         runner, options, {}))
+                                         runner, options, {}), wanted)
     stability = dict(scored.stability)
     if "convergence" in sections:
         stability |= convergence_outcomes(sections["convergence"].table)
