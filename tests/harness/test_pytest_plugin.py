@@ -14,6 +14,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from harness.pytest_plugin import bundled_scenes
 from tests.conftest import REPO
 
 EXAMPLE = REPO / "examples" / "caustics-example-method"
@@ -66,8 +67,10 @@ def test_caustics_scenes_marker_parametrises_the_scene(pytester):
     """)
     result = pytester.runpytest("-p", "no:cacheprovider", "-q")
     outcomes = result.parseoutcomes()
-    # 2 named; the bundled scenes less the hard cases: 8 (README's scene table).
-    assert outcomes["passed"] == 2 + 8, result.stdout.str()
+    # 2 named, and one per bundled scene less the hard cases.
+    bundled = bundled_scenes(hard=False)
+    assert "glass_sphere" in bundled and not any(n.startswith("hard/") for n in bundled)
+    assert outcomes["passed"] == 2 + len(bundled), result.stdout.str()
 
 
 def _example_env(tmp_path: Path) -> dict[str, str]:
