@@ -122,7 +122,8 @@ class ReceiverEstimate:
     cut_fraction : float
         Largest fraction, over RGB, of the emitted flux on paths that the safety cap
         of :data:`.photons.MAX_SPECULAR_EVENTS` stopped (all-paths mode, past Russian
-        roulette; 0 in chain mode, whose chains end by definition).
+        roulette; 0 in chain mode, whose chains end by definition), over every
+        seed's photons.
     relative_noise_per_channel : tuple of float
         (R, G, B): each channel's RMS relative standard error, the largest over the
         receivers (nan for a channel lit nowhere in the regions).
@@ -225,6 +226,23 @@ class ReceiverRounds:
         Photon-tracer passes per photon: 1, or 3 with dispersion.
     caustic_only : bool
         The sums carry only the caustic maps (no ``total``).
+
+    Attributes
+    ----------
+    plan : tuple of int
+        Lanes of the starting budget's launches (one per round).
+    photons : int
+        Photons per seed added so far.
+    history : list of (int, float, float)
+        (photons per seed, relative noise, elapsed seconds) after each round.
+    noise : float
+        The last round's relative noise (the largest channel's; nan before a round).
+    per_channel : ndarray (3,)
+        The last round's (R, G, B) noise, the largest over the receivers.
+    region_texels : tuple of int
+        Texels of each receiver's caustic region in the last round.
+    stopped_by : str or None
+        The stop reason once a round stopped the rounds (:func:`stop_reason`).
 
     Raises
     ------
