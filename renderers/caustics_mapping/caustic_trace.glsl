@@ -28,7 +28,8 @@
 // cosine clamped at 0.1); otherwise the status is STATUS_UNCONVERGED and the vertex
 // is splatted only with u_splat_unconverged. With verified hits a closed object's
 // exit ray is also tested for re-entering its object (reenters()): the L T T D chain
-// ends there, so such a vertex is STATUS_REENTERED and not splatted.
+// ends there, so such a vertex is STATUS_REENTERED and not splatted; so is a verified
+// reflected ray that meets its object again before its hit (reflection_blocked()).
 #include "common.glsl"
 
 layout(std430, binding = 0) writeonly buffer Records { vec4 records[]; };
@@ -43,6 +44,8 @@ uniform sampler2D u_back_positions;      // object atlas at u_back_size texels p
 uniform sampler2D u_back_normals;
 uniform int u_grid;
 uniform int u_back_size;
+uniform sampler2D u_far_positions;        // object atlas: the conductors' farthest surfaces
+uniform int u_has_far;                    // 1: u_far_positions is bound
 uniform mat4 u_obj_vp[6];
 uniform int u_obj_cube;
 uniform int u_obj_persp;
@@ -68,8 +71,11 @@ uniform int u_safeguarded;
 uniform int u_exit_iterations;  // refinements of the exit point (double refraction)
 
 const int STATUS_NO_EXIT = 5;   // double refraction found no exit surface
-const int STATUS_REENTERED = 7; // the exit ray enters its object again
+const int STATUS_REENTERED = 7; // the exit (or reflected) ray meets its object again
 const int REENTRY_STEPS = 48;   // samples of the exit ray over the object's extent
+const float SHEET_STEPS = 8.0;     // reflection_blocked: a sheet's depth change per sample step
+
+
 
 #if defined COMPUTE_SHADER
 layout(local_size_x = 64) in;
@@ -260,6 +266,57 @@ bool reenters(vec3 e, vec3 r, int object) {
     return false;
 }
 
+// One layer of a reflection_blocked test: the sample's side of the layer's surface
+// seen through its texel, and whether the ray crossed that surface since the last
+// sample that saw it (`s_prev`, `depth_prev`, `have_prev` carry the last sample).
+bool crosses_layer(sampler2D layer, vec3 x, int object, float step, float w,
+                   inout float s_prev, inout float depth_prev, inout bool have_prev) {
+    float depth;
+    if (!surface_depth(layer, u_grid, x, object, depth)) {
+        have_prev = false;
+        return false;
+    }
+    float s = light_distance(x) - depth;        // > 0: behind the surface from the light
+    bool crossed = have_prev && (s > 0.0) != (s_prev > 0.0)
+        && abs(depth - depth_prev) <= SHEET_STEPS * step + 2.0 * w;
+    s_prev = s;
+    depth_prev = depth;
+    have_prev = true;
+    return crossed;
+}
+
+// Whether the reflected ray v + s r meets `object` again before the estimate s = d,
+// as far as the light's two images of the objects show: the front (nearest) surfaces
+// and, where bound, the conductors' farthest ones (u_far_positions; nearest texel). A
+// ray crossing a surface an image shows passes from in front of it (nearer the light
+// than the surface seen through the sample's texel) to behind it, or back, between
+// two samples whose surface depths differ by at most SHEET_STEPS sample steps plus 2
+// texel widths w (one sheet: a larger jump is the view passing an edge to another
+// sheet, e.g. from the far wall of a ring to the near one, which crosses nothing).
+// REENTRY_STEPS samples up to the hit itself; those within 2 w of v are skipped (the
+// ray still leaves its own sheet's rounded depths). The chain L S D ends at the
+// object, as the reference's does: on cup_sun 19 % of the splatted flux, on bowl_sun
+// 52 %, came from rays that meet the object again; this test finds all but 2.7 %
+// and 0.05 % of the splatted flux (exact ray casts) and drops 0.2 % whose exact ray is
+// free. A sheet between the nearest and the farthest (a third layer, e.g. a cup's
+// side walls seen edge-on) is not seen.
+bool reflection_blocked(vec3 v, vec3 r, float d, int object) {
+    float view = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z);
+    float step = d / float(REENTRY_STEPS);  // the last sample is the hit itself
+    float s_front = 0.0, depth_front = 0.0, s_far = 0.0, depth_far = 0.0;
+    bool have_front = false, have_far = false;
+    for (int k = 1; k <= REENTRY_STEPS; ++k) {
+        vec3 x = v + (step * float(k)) * r;
+        float w = view / float(u_grid) * (u_obj_persp == 1 ? length(x - u_light_pos) : 1.0);
+        if (step * float(k) < 2.0 * w) continue;
+        if (crosses_layer(u_front_positions, x, object, step, w, s_front, depth_front,
+                          have_front)) return true;
+        if (u_has_far == 1 && crosses_layer(u_far_positions, x, object, step, w, s_far,
+                                            depth_far, have_far)) return true;
+    }
+    return false;
+}
+
 void write_record(int base, vec3 v, float view, vec3 r, float d, vec3 p, int status,
                   vec3 flux, float receiver, vec3 normal) {
     records[base + 0] = vec4(v, view);
@@ -375,6 +432,14 @@ void main() {
                 tol = map_texel_width(p, u_positions_size) / max(c, 0.1);
             }
             if (!seen || length(t.xyz - p) > tol) status = STATUS_UNCONVERGED;
+            // A reflected ray leaving the receiver's tangent plane at T(P) (v and v + r
+            // on the same side) cannot meet it: an estimate within the tolerance of it
+            // is a ray from an object that touches the receiver (bowl_sun's bottom,
+            // within a texel of the floor, reflecting upwards: 1.4 % of its flux).
+            else if (material == 3 && dot(r, normal) * dot(v - t.xyz, normal) >= 0.0)
+                status = STATUS_UNCONVERGED;
+            else if (material == 3 && reflection_blocked(v, r, d, object))
+                status = STATUS_REENTERED;
         } else if (!seen) {
             status = STATUS_LOST;
         }

@@ -188,7 +188,7 @@ def run_caustic_trace(
     ctx: moderngl.Context, light: LightSetup, *, positions: ReceiverPositions,
     front: ObjectSurfaces, back: ObjectSurfaces | None, materials: MaterialTable,
     grid: int, options: TraceOptions, back_size: int | None = None, channel: int = -1,
-    paper: bool = False, covered: int = 0,
+    paper: bool = False, covered: int = 0, far: ObjectSurfaces | None = None,
 ) -> Trace:
     """Run the vertex grid once; returns the record and history buffers.
 
@@ -201,6 +201,10 @@ def run_caustic_trace(
         pass carries.
     paper, covered : bool, int
         The paper's Eq. 6 flux with V = ``covered`` grid texels.
+    far : ObjectSurfaces, optional
+        The conductors' farthest surfaces at ``grid`` texels per view: with verified
+        hits a reflected ray is also tested against this layer for meeting its object
+        again.
     """
     iterations = options.iterations
     count = len(light.object_views) * grid * grid
@@ -214,6 +218,8 @@ def run_caustic_trace(
              "u_front_positions": front.positions, "u_front_normals": front.normals}
     if back is not None:
         units |= {"u_back_positions": back.positions, "u_back_normals": back.normals}
+    if far is not None:
+        units |= {"u_far_positions": far.positions}
     for unit, (name, tex) in enumerate(units.items()):
         tex.use(location=unit)
         set_uniform(program, name, unit)
@@ -235,7 +241,7 @@ def run_caustic_trace(
         ("u_filtered", int(options.filtered)), ("u_start", int(options.start == "fixed")),
         ("u_start_distance", float(options.start_distance)), ("u_verify", int(options.verify)),
         ("u_hit_tolerance", float(options.hit_tolerance or 0.0)), ("u_count", count),
-        ("u_converged", float(options.converged)),
+        ("u_converged", float(options.converged)), ("u_has_far", int(far is not None)),
     ):
         set_uniform(program, name, value)
     records.bind_to_storage_buffer(0)

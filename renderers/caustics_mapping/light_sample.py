@@ -272,6 +272,15 @@ def _trace_objects(state: FrameState, light: LightSetup, *, positions):
             back = render_object_surfaces(ctx, light, setup.objects, grid=s.back_resolution,
                                           back=True, which=setup.closed)
         acc.ran("object_positions.back")
+    # The conductors' farthest surfaces: with the front ones, the two layers a
+    # reflected ray is tested against for meeting its object again (caustic_trace.glsl).
+    conductors = [i for i in setup.caustic_objects if setup.materials.code[i] == 3]
+    far = None
+    if conductors and s.verify_hits:
+        with timer.measure("object_positions.far"):
+            far = render_object_surfaces(ctx, light, setup.objects, grid=s.grid,
+                                         which=conductors, farthest=True)
+        acc.ran("object_positions.far")
     for channel in setup.channels:
         name = f"caustic_trace.{setup.paths}" + (
             f".{CHANNELS[channel]}" if channel >= 0 else "")
@@ -280,9 +289,11 @@ def _trace_objects(state: FrameState, light: LightSetup, *, positions):
                 ctx, light, positions=positions, front=front, back=back,
                 materials=setup.materials, grid=s.grid, back_size=s.back_resolution,
                 options=trace_options(s, setup.eps), channel=channel,
-                paper=setup.paper, covered=front.covered)
+                paper=setup.paper, covered=front.covered, far=far)
         acc.ran(name)
         traces.append(trace)
+    if far is not None:
+        far.give_back(pool(ctx))
     return front, back, traces
 
 

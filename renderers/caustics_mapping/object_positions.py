@@ -2,7 +2,8 @@
 
 The object atlas has ``grid`` x ``grid`` texels per object view, so each texel is one
 vertex of the paper's refractive vertex grid. Front surfaces always; back (exit)
-surfaces when the effects include ``refraction.double`` (Wyman 2005). The front
+surfaces when the effects include ``refraction.double`` (Wyman 2005); the farthest
+surfaces of conductors with verified hits (the reflected rays' occlusion test). The front
 pass runs inside an occlusion (samples) query: its count is the paper's V, the
 number of grid texels the object covers (Eq. 6).
 """
@@ -46,6 +47,7 @@ class ObjectSurfaces:
 def render_object_surfaces(
     ctx: moderngl.Context, light: LightSetup, objects: list[GpuMesh], *, grid: int,
     back: bool = False, which: list[int] | None = None, count: bool = False,
+    farthest: bool = False,
 ) -> ObjectSurfaces:
     """Render the caustic objects (indices ``which``, default all) into the object views.
 
@@ -57,6 +59,11 @@ def render_object_surfaces(
         Count the covered grid texels with an occlusion query (the paper's V): the
         surfaces are drawn a second time with depth test ``==`` inside the query, so
         fragments later hidden by nearer ones (overdraw) are not counted.
+    farthest : bool
+        Keep the farthest surface along each light ray instead of the nearest (depth
+        test ``>``): the layer behind the front one where a ray meets the objects
+        twice (a ring's far wall behind its near wall, a bowl's inside behind its
+        rim).
     """
     views = light.object_views
     resources = pool(ctx)
@@ -68,8 +75,10 @@ def render_object_surfaces(
     )
     set_light_uniforms(program, light)
     fbo.use()
-    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=0.0 if farthest else 1.0)
     ctx.enable(moderngl.DEPTH_TEST)
+    if farthest:
+        ctx.depth_func = ">"
     ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
     indices = range(len(objects)) if which is None else which
     # No back-face culling here (unlike the shadow map and camera passes): at a
@@ -87,6 +96,7 @@ def render_object_surfaces(
                 vao.render(moderngl.TRIANGLES)
 
     draw()
+    ctx.depth_func = "<"
     covered = 0
     if count:
         query = ctx.query(samples=True)

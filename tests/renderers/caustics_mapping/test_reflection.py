@@ -35,23 +35,27 @@ def _exact_floor_distance(v, r):
 
 
 def test_reflected_rays_are_verified_hits_at_the_exact_distance(ring_frame):
-    """Every reflected vertex is a verified hit (before the fix: 33 % unconverged) and
-    its distance is within half a positions texel of the exact ray cast: the secant
-    finds the root of h on the bilinear reads of the floor's positions, which is off
-    the exact root by the reads' interpolation error (measured worst 0.26 texel at
-    these small settings, 0.012 at the golden 512-texel map; the safeguard's old
-    bisection left rays 12 texels off). The flux splatted is all the reflected flux."""
+    """Every reflected vertex converges (before the fix: 33 % unconverged) and its
+    distance is within half a positions texel of the exact ray cast: the secant finds
+    the root of h on the bilinear reads of the floor's positions, which is off the
+    exact root by the reads' interpolation error (measured worst 0.26 texel at these
+    small settings, 0.012 at the golden 512-texel map; the safeguard's old bisection
+    left rays 12 texels off). Each is a hit, or ``reentered`` where the reflected ray
+    meets the ring again on its way (1.9 % of the flux by exact ray casts at the
+    golden settings; at most 3 % here)."""
     _, frame = ring_frame
     hits = frame.hits
     traced = hits["status"] != STATUS["empty"]
     assert traced.sum() > 1000
-    assert np.all(hits["status"][traced] == STATUS["hit"])
+    assert np.all(np.isin(hits["status"][traced], [STATUS["hit"], STATUS["reentered"]]))
     v, r = hits["origin"][traced], hits["direction"][traced]
     exact = _exact_floor_distance(v, r)
     texel = frame.lookups[0].texel_width(v + exact[:, None] * r)
     error = np.abs(hits["distance"][traced] - exact) / texel
     assert error.max() < 0.5, f"worst {error.max():.3g} texel"
-    assert frame.result.metadata["status_flux_fraction"]["hit"] == pytest.approx(1.0)
+    fractions = frame.result.metadata["status_flux_fraction"]
+    assert fractions["unconverged"] == 0.0
+    assert fractions["reentered"] <= 0.03
 
 
 def test_mirror_matches_the_shader_on_reflected_rays(ring_frame):
