@@ -36,7 +36,7 @@ from harness.checks.run import CheckFiles, comparison_checks, load_check_files
 from harness.checks.stability import convergence_outcomes
 from harness.compare.headlines import with_headlines
 from harness.compare.provenance import provenance
-from harness.compare.scoring import References, require_caustic, score_render
+from harness.compare.scoring import References, Scored, require_caustic, score_render
 from harness.compare.studies import Study, StudyContext, registered_studies
 from harness.compare.timed import TimedRender, timed_render
 from harness.crosscheck import run_crosscheck
@@ -206,7 +206,7 @@ def run_comparison(scene: Scene, method: Method, *,
     ------
     harness.compare.scoring.NoCausticError
         The reference puts no caustic light on any receiver (the error carries the
-        finished comparison, every caustic metric NaN).
+        scored comparison, without studies, checks or cross-check).
     """
     scene = method.configure(scene)
     references = references or render_references(scene, options)
@@ -216,6 +216,10 @@ def run_comparison(scene: Scene, method: Method, *,
         geometry = runner.geometry if runner is not None else build_geometry(scene)
         render = render or timed_render(method, scene, repeats=options.repeats, runner=runner)
         scored = score_render(scene, geometry, render, references)
+        # A scene with no caustic poses no question: its scores and files say where the
+        # light went; no study, check or cross-check runs on it.
+        require_caustic(references.reference, comparison=_assemble(
+            scene, method, scored, render, references, sweep=sweep))
         sections = _studies(StudyContext(scene, method, geometry, render, references, scored,
                                          runner, options, {}), wanted)
     stability = dict(scored.stability)
@@ -234,16 +238,26 @@ def run_comparison(scene: Scene, method: Method, *,
         result = run_crosscheck(scene, photons=crosscheck.photons, seeds=scene.settings.seeds,
                                 other_photons=crosscheck.photons)
         table, cross = result.table(), result.provenance
-    comparison = with_headlines(SceneComparison(
+    return _assemble(scene, method, scored, render, references, sweep=sweep,
+                     stability=stability, sections=tuple(sections.values()), checks=found,
+                     checks_not_applied=not_applied, crosscheck=table,
+                     crosscheck_provenance=cross)
+
+
+def _assemble(scene: Scene, method: Method, scored: Scored, render: TimedRender,
+              references: References, *, sweep: dict | None, stability: dict | None = None,
+              sections: tuple[Section, ...] = (), checks: tuple = (),
+              checks_not_applied: dict | None = None, crosscheck=None,
+              crosscheck_provenance: dict | None = None) -> SceneComparison:
+    """The comparison from its stages' results, headlines made last."""
+    return with_headlines(SceneComparison(
         name=scene.name, description=scene.info.description, source=scene.source,
         effects=effects_of(scene), settings=asdict(scene.settings), method=method.name,
         method_description=method.description, metrics=scored.metrics, images=scored.images,
         exposure=scored.exposure, files=scored.files,
         provenance=provenance(scene.source, method, render, references, notes=scored.notes,
                               reference_noise=scored.reference_noise,
-                              checks_not_applied=not_applied, crosscheck=cross, sweep=sweep),
-        stability=stability, budgets=scored.budgets, sections=tuple(sections.values()),
-        checks=found, crosscheck=table))
-    require_caustic(references.reference, comparison=comparison)
-    return comparison
-
+                              checks_not_applied=checks_not_applied,
+                              crosscheck=crosscheck_provenance, sweep=sweep),
+        stability=scored.stability if stability is None else stability,
+        budgets=scored.budgets, sections=sections, checks=checks, crosscheck=crosscheck))
