@@ -219,7 +219,7 @@ def run_caustic_trace(
     if back is not None:
         units |= {"u_back_positions": back.positions, "u_back_normals": back.normals}
     if far is not None:
-        units |= {"u_far_positions": far.positions}
+        units |= {"u_far_positions": far.positions, "u_far_normals": far.normals}
     for unit, (name, tex) in enumerate(units.items()):
         tex.use(location=unit)
         set_uniform(program, name, unit)

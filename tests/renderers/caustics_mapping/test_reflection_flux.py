@@ -22,7 +22,7 @@ from renderers.mitsuba.reference import estimate_receivers
 
 from .conftest import SCENES, small_scene
 
-pytestmark = [pytest.mark.physical_requirement, pytest.mark.slow]
+pytestmark = pytest.mark.physical_requirement
 
 REFLECTION_SCENES = ["cup_sun", "bowl_sun", "ring_point", "metal_ring"]
 #: Photons per seed of the reference: one whole launch.
