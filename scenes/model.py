@@ -426,8 +426,9 @@ class Settings:
         None, doc="Intersection estimator (preset: paper modified, strong secant)."
     )
     safeguarded: bool | None = spec(
-        None, doc="Detect oscillation and fall back to bisection on a bracket "
-        "(preset: paper false, strong true)."
+        None, doc="Detect oscillation and fall back to a bracket (its false position, "
+        "else its bisection); stop at a converged estimate (preset: paper false, "
+        "strong true)."
     )
     iterations: int | None = spec(
         None, doc="Estimator iterations (preset: paper 3, strong 5).", ge=0, le=64
