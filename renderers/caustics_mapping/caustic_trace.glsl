@@ -104,7 +104,7 @@ bool receiver_at(vec3 x, out vec4 t, out vec3 n) {
 // ray's, over 1 m of water): without this those vertices were lost (2.1 % of the
 // flux on water_pool). Only the estimates use it: the final hit must be seen at its
 // own texel (verified hits), so a hit past the edge is not splatted, and one within
-// the receiver's last half texel is lost with it (water_pool -0.25 %).
+// the receiver's last half texel is lost with it (water_pool -0.2 %).
 const int EDGE_TEXELS = 4;
 bool receiver_beyond_edge(vec3 x, out vec4 t, out vec3 n) {
     t = vec4(0.0);

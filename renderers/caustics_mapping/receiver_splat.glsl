@@ -86,13 +86,9 @@ float triangle_area(vec2 a, vec2 b, vec2 c, vec3 pa, vec3 pb, vec3 pc, vec3 n) {
 // points: the width the splat has in the caustic map, u_sigma caustic-map texels at
 // the hit, in metres on the receiver, in (u, v), in map pixels (at least half a
 // pixel per axis); footprint: the grid's hit differences, that width where none is
-// known. A hit off the (u, v) domain of a receiver with affine (u, v) (a plane or
-// heightfield, whose domain ends at its edge) is off the receiver: dropped (the
-// caustic trace extrapolates lookups past a receiver's edge, so such hits exist);
-// on other receivers a hit just off the domain (its lookup found this receiver, so
-// it is at the edge) is clamped onto the border texels. A hit on the receiver near
-// its edge keeps its whole flux: the Gaussian's weights are renormalised over the
-// map's pixels (gaussian_norm within target_bounds).
+// known. A hit whose estimate P lies just off the (u, v) domain (its lookup found
+// this receiver, so it is at the edge) is clamped onto the border texels, so no
+// flux is lost between the caustic map and this map.
 mat2 gaussian_covariance(int view, int tx, int ty, vec3 hit, vec3 normal, inout vec2 c) {
     vec2 size = vec2(u_map_size);
     vec2 span = uv_span();
@@ -102,10 +98,7 @@ mat2 gaussian_covariance(int view, int tx, int ty, vec3 hit, vec3 normal, inout 
     map_locate(hit, u_caustic_size, face, ndc, texel);
     float metres = u_sigma * sqrt(map_texel_area(hit, normal, ndc, u_caustic_size));
     vec2 sigma = max(metres * u_uv_per_metre / span * size, vec2(0.5));
-    bool off = any(lessThan(c, vec2(0.0))) || any(greaterThan(c, size));
-    // Off an affine receiver: far outside the map, so gaussian_norm is 0 and the
-    // vertex is not drawn.
-    c = u_uv_affine == 1 && off ? vec2(-1e6) : clamp(c, vec2(0.5), size - 0.5);
+    c = clamp(c, vec2(0.5), size - 0.5);
     return u_splat_mode == SPLAT_POINTS ? mat2(sigma.x * sigma.x, 0.0, 0.0, sigma.y * sigma.y)
         : footprint_covariance(view, tx, ty, c, max(sigma.x, sigma.y));
 }

@@ -73,7 +73,7 @@ def _floor_flux(preset: str, ctx) -> tuple[float, np.ndarray]:
 
 def test_strong_keeps_the_flux_that_lands_at_the_floors_edge(ctx):
     """The strong preset's floor flux is E0 cos(theta) x 16 m^2 within 5e-3 (measured
-    -1.8e-3: the hits in the floor's last half positions texel, whose own texel shows
+    -1.6e-3: the hits in the floor's last half positions texel, whose own texel shows
     no floor, are not verified), and its edge texels keep more than 55 % of the
     interior's irradiance (measured 62 %). Before, every vertex whose light ray
     passes the edge was lost: flux -2.0 %, edge texels 41 % (the paper preset, whose
