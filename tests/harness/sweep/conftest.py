@@ -3,7 +3,8 @@
 The scenes are the bundled glass sphere (two refractions) and water pool (one
 refraction) with a 48 × 36 camera; the sweep file shrinks every map and budget
 (vertex grid 32, maps 128 px, receiver map 48 × 48, 20 000 photons per seed, 2
-seeds, 2 spp), so a row costs a few seconds, most of it HDR-FLIP's fixed cost per
+seeds, 2 spp; a noise target of 0.5, which that one launch meets, so no reference
+traces past its budget), so a row costs a few seconds, most of it HDR-FLIP's fixed cost per
 call (about 0.3–0.9 s on this machine, ten calls per row).
 
 :class:`DaskCluster` starts a real ``dask scheduler`` and ``dask worker`` processes
@@ -51,6 +52,7 @@ iterations = {iterations}
 [sweep.reference]
 {photons}seeds = 2
 spp = 2
+target_noise = 0.5
 """
 
 
