@@ -86,8 +86,24 @@ class ComparisonError(HarnessError):
         self.failure = failure
 
 
+class _Named:
+    """The scene and method names of a result that wraps a record."""
+
+    record: SceneComparison | SceneFailure
+
+    @property
+    def name(self) -> str:
+        """The scene's name (a file that did not load: its stem)."""
+        return self.record.name
+
+    @property
+    def method(self) -> str:
+        """The method's name."""
+        return self.record.method
+
+
 @dataclass(frozen=True)
-class Comparison:
+class Comparison(_Named):
     """One scene and method compared with the reference.
 
     Attributes
@@ -105,16 +121,6 @@ class Comparison:
     record: SceneComparison
     scene: Scene
     page: Path | None = None
-
-    @property
-    def name(self) -> str:
-        """The scene's name."""
-        return self.record.name
-
-    @property
-    def method(self) -> str:
-        """The method's name."""
-        return self.record.method
 
     @property
     def metrics(self) -> tuple[MetricValue, ...]:
@@ -169,7 +175,7 @@ class Comparison:
 
 
 @dataclass(frozen=True)
-class Failure:
+class Failure(_Named):
     """A scene and method whose comparison failed (with ``isolate``, the others go on).
 
     Attributes
@@ -182,16 +188,6 @@ class Failure:
 
     record: SceneFailure
     page: Path | None = None
-
-    @property
-    def name(self) -> str:
-        """The scene's name (a file that did not load: its stem)."""
-        return self.record.name
-
-    @property
-    def method(self) -> str:
-        """The method's name."""
-        return self.record.method
 
     @property
     def stage(self) -> str:

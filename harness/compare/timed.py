@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import statistics
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from harness.studies.runner import RealtimeRunner, caustic_seconds, frame_seconds
 from renderers.methods import Method
@@ -51,7 +51,7 @@ class TimedRender:
     result: RenderResult
     warm_seconds: float
     timer: str
-    hits: dict | None = None
+    hits: dict | None = field(default=None, repr=False)  # large per-vertex arrays
     maps_seconds: float | None = None
     gl_renderer: str | None = None
 

@@ -40,7 +40,6 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.special import stdtrit
 
 from harness.metrics import MetricInputError
 from harness.metrics.baselines import (
@@ -51,7 +50,7 @@ from harness.metrics.baselines import (
     perceptual_baseline,
     ssim_map,
 )
-from harness.metrics.excess import CONFIDENCE, excess_relative_mse
+from harness.metrics.excess import excess_relative_mse, t_interval
 from reports.display import LUMA
 
 __all__ = ["BASELINE_TRIALS", "ExcessInputs", "metric_excess"]
@@ -86,8 +85,7 @@ class ExcessInputs:
 
 
 def _interval(excess: float, stderr: float, dof: float = math.inf) -> dict:
-    half = float(stdtrit(dof, 0.5 + CONFIDENCE / 2)) * stderr
-    low, high = excess - half, excess + half
+    low, high = t_interval(excess, stderr, dof)
     return {"excess": excess, "excess_stderr": stderr, "excess_ci95": (low, high),
             "distinguishable": bool(stderr > 0 and (low > 0 or high < 0))}
 

@@ -81,10 +81,19 @@ from scipy.special import stdtrit
 
 from harness.metrics.scores import RELMSE_EPSILON, MetricInputError, relative_mse
 
-__all__ = ["ExcessError", "excess_relative_mse", "relmse_variance_terms", "scored_region"]
+__all__ = ["CONFIDENCE", "ExcessError", "excess_relative_mse", "relmse_variance_terms",
+           "scored_region", "t_interval"]
 
 #: Two-sided confidence of the reported interval.
 CONFIDENCE = 0.95
+
+
+def t_interval(estimate: float, stderr: float, dof: float = float("inf")
+               ) -> tuple[float, float]:
+    """The :data:`CONFIDENCE` interval estimate ± t_(1+c)/2(dof) · stderr (Student t;
+    normal for infinite ``dof``)."""
+    half = float(stdtrit(dof, 0.5 + CONFIDENCE / 2)) * stderr
+    return estimate - half, estimate + half
 
 
 @dataclass(frozen=True)
@@ -335,8 +344,7 @@ def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
     stderr = float(np.sqrt(max(total, 0.0))) / count
     spread = float(np.sum(texel_var**2))
     df = total**2 / (spread / dof) if spread > 0 and total > 0 else float("inf")
-    half = float(stdtrit(df, 0.5 + CONFIDENCE / 2)) * stderr
-    low, high = excess - half, excess + half
+    low, high = t_interval(excess, stderr, df)
     return ExcessError(
         value=value, baseline=float(baseline[sel].sum()) / count, excess=excess,
         excess_stderr=stderr, excess_ci95=(low, high),
