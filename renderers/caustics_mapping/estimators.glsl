@@ -27,8 +27,8 @@
 // region), or oscillates (reverses direction without at least halving the step, from
 // the last two estimates) is replaced by the false-position point of the bracket
 // where both ends' residuals are known (inside the bracket, and next to the end with
-// the smaller |h|), else by its bisection (or by the modified step while no upper end
-// is known). Bisection threw good estimates away: h is piecewise smooth (bilinear
+// the smaller |h|) and it does not itself oscillate, else by the bracket's bisection
+// (or by the modified step while no upper end is known). Bisection threw good estimates away: h is piecewise smooth (bilinear
 // reads; kinks at texel borders), a secant across a kink reverses, and halving a
 // bracket [0, hi] whose hi is within a hundredth of a texel of the root undid it.
 // Unsafeguarded, a non-finite update ends the iterations as STATUS_DIVERGED; a lookup
@@ -149,10 +149,13 @@ int estimate_along(int surface, vec3 v, vec3 r, float start, int estimator, bool
                 && abs(prop - d) >= 0.5 * abs(d - d_prev);
             bool outside = prop < lo || (hi >= 0.0 ? prop > hi : prop > 2.0 * max(g, lo));
             if (!finite || osc || outside) {
-                if (hi < 0.0) prop = g;
-                else if (lo_known && hi_known && h_lo > h_hi)
-                    prop = lo + h_lo * (hi - lo) / (h_lo - h_hi);   // false position
-                else prop = 0.5 * (lo + hi);
+                prop = hi < 0.0 ? g : 0.5 * (lo + hi);
+                if (hi >= 0.0 && lo_known && hi_known && h_lo > h_hi) {
+                    float fp = lo + h_lo * (hi - lo) / (h_lo - h_hi);   // false position
+                    bool fp_osc = k >= 2 && (fp - d) * (d - d_prev) < 0.0
+                        && abs(fp - d) >= 0.5 * abs(d - d_prev);
+                    if (!fp_osc) prop = fp;
+                }
             }
         } else if (!finite) {
             status = STATUS_DIVERGED;

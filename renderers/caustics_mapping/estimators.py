@@ -287,12 +287,14 @@ def estimate_distances(
             outside = (prop < lo) | np.where(hi >= 0, prop > hi,
                                              prop > _F(2) * np.maximum(g, lo))
             fallback = ~finite | osc | outside
-            # The bracket's false-position point where both ends' h are known, else
-            # its midpoint (estimators.glsl).
+            # The bracket's false-position point where both ends' h are known and it
+            # does not itself oscillate, else its midpoint (estimators.glsl).
             known = np.isfinite(h_lo) & np.isfinite(h_hi) & (h_lo > h_hi)
             with np.errstate(divide="ignore", invalid="ignore"):
                 falsi = (lo + h_lo * (hi - lo) / np.where(known, h_lo - h_hi, 1)).astype(_F)
-            inner = np.where(known, falsi, _F(0.5) * (lo + hi))
+            falsi_osc = (k >= 2) & ((falsi - d) * (d - d_prev) < 0) & (
+                np.abs(falsi - d) >= _F(0.5) * np.abs(d - d_prev))
+            inner = np.where(known & ~falsi_osc, falsi, _F(0.5) * (lo + hi))
             prop = np.where(fallback, np.where(hi >= 0, inner, g), prop)
         else:
             status = np.where(active & ~finite, DIVERGED, status)
