@@ -102,19 +102,24 @@ def test_physical_requirement_of_method(method_checks, record_property, name, me
         f"({c.origin})"
 
 
-def test_bunny_flux_excess_is_a_known_gap_of_both_presets(method_checks, record_property):
-    """The bunny's flux excess (+8.5 %, docs/method.md "Known gaps") measured against
-    the flux-agreement requirement (2 % + 4 standard errors of the golden's total,
-    ±2.05 %): it is still there in both presets (+8.5 % paper, +6.7 % strong; the strong
-    preset's fitted frustum and verified hits did not remove it), so both carry a known
-    gap; this test fails if the excess disappears without the gap entry going."""
+def test_bunny_flux_excess_is_a_known_gap_of_the_paper_preset_only(method_checks,
+                                                                    record_property):
+    """The bunny's flux excess (docs/method.md "Known gaps") measured against the
+    flux-agreement requirement (2 % + 4 standard errors of the golden's total,
+    ±2.05 %): the paper preset still splats light that re-enters the bunny after its
+    exit (+8.5 %) and carries a known gap; the strong preset drops it (its re-entry
+    test, status ``reentered``) and passes with no gap entry. This test fails if the
+    paper's excess disappears without its gap entry going, or if strong regresses."""
     record_property("checks", 2)
-    for method in ("paper", "strong"):
-        (flux,) = [c for c in method_checks("bunny", method) if c.metric == "flux agreement"]
-        marked = apply_gaps([flux], GAPS, scene="bunny", method=method)[0]
-        print(f"bunny ({method}): flux ratio {flux.value:.4f}, {flux.bound_text}")
-        assert not flux.passed and flux.value > 1 + FLUX_TOLERANCE
-        assert marked.outcome == "known gap", marked
+    (paper,) = [c for c in method_checks("bunny", "paper") if c.metric == "flux agreement"]
+    marked = apply_gaps([paper], GAPS, scene="bunny", method="paper")[0]
+    print(f"bunny (paper): flux ratio {paper.value:.4f}, {paper.bound_text}")
+    assert not paper.passed and paper.value > 1 + FLUX_TOLERANCE
+    assert marked.outcome == "known gap", marked
+    (strong,) = [c for c in method_checks("bunny", "strong") if c.metric == "flux agreement"]
+    print(f"bunny (strong): flux ratio {strong.value:.4f}, {strong.bound_text}")
+    assert strong.passed
+    assert apply_gaps([strong], GAPS, scene="bunny", method="strong")[0].outcome == "pass"
 
 
 # ---- the reference against the ideal sphere -------------------------------------------
