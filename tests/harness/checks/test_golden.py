@@ -181,12 +181,15 @@ def _z_test_fresh(name, failure_dir, record_property):
     maps, photons = fresh_reference(scene, seed=golden.entry["seed"] + 100)
     record_property("checks", len(maps))
     for i, (old, new) in enumerate(zip(golden.receivers, maps, strict=True)):
-        # t quantiles on each variance's degrees of freedom; a dispersion scene traces
-        # one pass per channel (independent channel noise).
+        # t quantiles on each variance's degrees of freedom, the two variances pooled
+        # (the same tracer on other seeds: Student's two-sample test, whose
+        # false-failure rate test_ztest.py measures at 4.3-4.8 % for a nominal 5 %); a
+        # dispersion scene traces one pass per channel (independent channel noise).
         result = z_test(new.irradiance, old.irradiance, old.variance, test_photons=photons,
                         reference_photons=golden.photons, test_variance=new.variance,
                         reference_seeds=int(golden.entry["seeds"]), test_seeds=FRESH_SEEDS,
-                        channel_correlation=0.0 if "dispersion" in effects_of(scene) else 1.0)
+                        channel_correlation=0.0 if "dispersion" in effects_of(scene) else 1.0,
+                        variance_rule="pooled")
         print(f"{name} receiver{i}: {result.summary()}")
         if not result.passed:
             written = write_failure_images(failure_dir, f"golden-{name}-receiver{i}",

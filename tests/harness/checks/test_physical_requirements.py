@@ -189,7 +189,8 @@ def _z(golden_renders, maps, photons):
     ref = golden.receivers[0]
     return z_test(maps[0].irradiance, ref.irradiance, ref.variance, test_photons=photons,
                   reference_photons=golden.photons, test_variance=maps[0].variance,
-                  reference_seeds=int(golden.entry["seeds"]), test_seeds=FRESH_SEEDS)
+                  reference_seeds=int(golden.entry["seeds"]), test_seeds=FRESH_SEEDS,
+                  variance_rule="pooled")  # as test_golden.py: Student's two-sample test
 
 
 def test_fresh_reference_meets_the_physical_requirements(golden_renders, glass_renders,
