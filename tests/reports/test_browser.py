@@ -104,6 +104,21 @@ class PageLog:
         assert not self.external, self.external
 
 
+def open_ready_page(browser, path: Path):
+    """(page, its PageLog) of ``path`` opened in ``browser``, once the page says its
+    images are ready (polled from here: ``wait_for_function`` evaluates with eval(),
+    which the page's CSP refuses)."""
+    page = browser.new_page()
+    log = PageLog(page)
+    page.goto(path.as_uri(), wait_until="load")
+    deadline = time.monotonic() + 30
+    while page.evaluate("document.body.dataset.hdrReady") is None:
+        assert time.monotonic() < deadline, "the page's images never got ready"
+        page.wait_for_timeout(50)
+    assert page.evaluate("document.body.dataset.hdrReady") == "true"
+    return page, log
+
+
 def _open(browser, path: Path):
     page = browser.new_page()
     log = PageLog(page)

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import csv
 import json
-import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -31,7 +30,7 @@ from reports.profiles import line_pixels
 from tests.conftest import REPO
 from tests.reports.data_helpers import blob_payload, page_layers
 from tests.reports.temporal_helpers import launch_browser
-from tests.reports.test_browser import PageLog
+from tests.reports.test_browser import open_ready_page
 
 ARTIFACTS = REPO / "test-artifacts"
 SCENE = "glass_sphere-paper"
@@ -141,19 +140,6 @@ def test_previews_box_filtered_down_ship_box_means(tmp_path, comparison_factory)
 
 # ---- in the browser ---------------------------------------------------------------
 
-def _open(browser, path: Path):
-    page = browser.new_page()
-    log = PageLog(page)
-    page.goto(path.as_uri(), wait_until="load")
-    # Polled from here: wait_for_function evaluates with eval(), which the CSP refuses.
-    deadline = time.monotonic() + 30
-    while page.evaluate("document.body.dataset.hdrReady") is None:
-        assert time.monotonic() < deadline, "the page's images never got ready"
-        page.wait_for_timeout(50)
-    assert page.evaluate("document.body.dataset.hdrReady") == "true"
-    return page, log
-
-
 def _layer(view: str, panel: str) -> str:
     return f'#view-{view} .viewport[data-panel="{panel}"] .zoom'
 
@@ -201,7 +187,7 @@ def test_hovering_shows_the_exr_values(browser, pages, known, exr, mode):
     move it), the reference's standard error sqrt(Var), the SSIM and FLIP there, the EXR pixel
     (receiver rows flipped back) and the units; no console error, nothing requested
     off the machine."""
-    page, log = _open(browser, pages[mode])
+    page, log = open_ready_page(browser, pages[mode])
     units = {"camera": "W m⁻² sr⁻¹", "receiver0": "W/m²"}
     for view in ("camera", "receiver0"):
         height, width = known.images[f"{view}/reference"].shape[:2]
@@ -288,7 +274,7 @@ def test_a_dragged_profile_plots_the_data(browser, pages, known, exr, mode):
     reference's ±2σ band, and the plotted samples are the EXRs' values there; with
     "drag draws a profile" ticked a plain drag does it too and nothing pans; the
     receiver map's default profile is the CSV written beside the page."""
-    page, log = _open(browser, pages[mode])
+    page, log = open_ready_page(browser, pages[mode])
     default = _samples(page, "receiver0")
     with open(pages["linked"].parent / "profile_receiver0.csv", newline="") as f:
         rows = list(csv.DictReader(f))
@@ -337,7 +323,7 @@ def test_log_and_false_colour_views(browser, pages, known):
     peak the reference's largest luminance, false colour the same g through the
     colormap table; the exposure shifts it; the colour bar and the profile's axis
     follow; the A/B image shows the same pixels."""
-    page, log = _open(browser, pages["linked"])
+    page, log = open_ready_page(browser, pages["linked"])
     selector = '#view-camera canvas.hdr[data-layer="method"]'
     linear = _canvas(page, selector)
     reference = np.asarray(known.images["camera/reference"], np.float32).astype(np.float64)
@@ -399,7 +385,7 @@ def test_zoom_and_pan_stay_in_sync(browser, pages, known):
     twice as wide, included) about the pointer's pixel, and no other view; a drag pans
     them together; the A/B split still follows the pointer in image units; a
     double-click resets."""
-    page, log = _open(browser, pages["linked"])
+    page, log = open_ready_page(browser, pages["linked"])
     where = _point(page, "camera", "method", 40, 30)
     page.mouse.move(*where)
     page.mouse.wheel(0, -600)
@@ -542,7 +528,7 @@ def test_both_method_pages_probe_the_shared_reference(browser, two_methods, know
     requested = {}
     for c in (known, second):
         folder = two_methods / c.page
-        page, log = _open(browser, folder / "index.html")
+        page, log = open_ready_page(browser, folder / "index.html")
         exr = {kind: read_exr(folder / f"camera_{kind}.exr")["RGB"]
                for kind in ("method", "reference", "signed")}
         page.mouse.move(*_point(page, "camera", "method", 40, 30))

@@ -18,7 +18,6 @@ import io
 import json
 import math
 import re
-import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -36,7 +35,7 @@ from reports.page_data import RELATIVE_BOUND
 from reports.panels import MAP_COLORMAPS, Z_LIMIT, Z_REPORTED
 from reports.records import EqualErrorSpeedup, SpeedupWithheld
 from tests.reports.temporal_helpers import launch_browser
-from tests.reports.test_browser import PageLog
+from tests.reports.test_browser import PageLog, open_ready_page
 
 KINDS = ("method", "reference", "signed", "ssim", "flip")
 VIEWS = ("camera", "receiver0")
@@ -141,19 +140,6 @@ def browser(tmp_path_factory):
         yield context
 
 
-def _open(browser, path: Path):
-    page = browser.new_page()
-    log = PageLog(page)
-    page.goto(path.as_uri(), wait_until="load")
-    # Polled from here: wait_for_function evaluates with eval(), which the CSP refuses.
-    deadline = time.monotonic() + 30
-    while page.evaluate("document.body.dataset.hdrReady") is None:
-        assert time.monotonic() < deadline, "the page's images never got ready"
-        page.wait_for_timeout(50)
-    assert page.evaluate("document.body.dataset.hdrReady") == "true"
-    return page, log
-
-
 def _point(page, view: str, panel: str, x: int, y: int) -> tuple[float, float]:
     """Page coordinates of display pixel (x, y)'s centre on a panel, scrolled clear of
     the sticky controls."""
@@ -202,7 +188,7 @@ def test_standard_error_and_z_maps_beside_each_difference(browser, reports, scen
     colour of that z, and the stated share of |z| > 3 is the EXRs' at full resolution."""
     c = scene["paper"]
     folder = reports["linked"] / c.page
-    page, log = _open(browser, reports[mode] / c.page / "index.html")
+    page, log = open_ready_page(browser, reports[mode] / c.page / "index.html")
     for view in VIEWS:
         kinds = page.evaluate(f"""Array.from(document.querySelectorAll(
             '#view-{view} figure.map-panel')).map((f) => f.dataset.kind)""")
@@ -246,7 +232,7 @@ def test_a_view_without_variance_says_so(browser, tmp_path, scene):
     c = replace(c, images={k: v for k, v in c.images.items()
                            if k != "receiver0/reference_variance"})
     build_report(tmp_path, [c])
-    page, log = _open(browser, tmp_path / c.page / "index.html")
+    page, log = open_ready_page(browser, tmp_path / c.page / "index.html")
     note = page.locator("#view-receiver0 figure.no-variance")
     assert note.is_visible() and "no per-pixel variance" in note.inner_text()
     assert page.locator('#view-receiver0 .viewport[data-panel="z"]').count() == 0
@@ -265,7 +251,7 @@ def test_one_difference_scale_per_scene(browser, reports, scene, exr):
     the two methods, and draws exactly those pixels in the marker colours."""
     limits = {}
     for name, c in scene.items():
-        page, log = _open(browser, reports["linked"] / c.page / "index.html")
+        page, log = open_ready_page(browser, reports["linked"] / c.page / "index.html")
         for view in VIEWS:
             figure = page.locator(f'#view-{view} figure.map-panel[data-kind="signed"]')
             limits[name, view] = (figure.locator(".bar-min").inner_text(),
@@ -307,7 +293,7 @@ def test_hardware_beside_every_speedup(browser, tmp_path, reports, scene):
                 "strong": (LLVMPIPE, "no GPU", "2 CPUs", "x86_64", "llvm_ad_rgb on the CPU")}
     shown = {"paper": "12.5× (95 % interval 8.25×–19.5×)", "strong": "at least 40×"}
     for name, c in scene.items():
-        page, log = _open(browser, reports["linked"] / c.page / "index.html")
+        page, log = open_ready_page(browser, reports["linked"] / c.page / "index.html")
         speedup = page.locator("#cost p.speedup")
         assert shown[name] in _text(speedup)
         beside = page.locator("#cost p.speedup + p.hardware")
@@ -324,7 +310,7 @@ def test_hardware_beside_every_speedup(browser, tmp_path, reports, scene):
     headlined = with_headlines(scene["paper"])
     assert headlined.speedup is not None, headlined.speedup_withheld
     build_report(tmp_path, [headlined])
-    page, log = _open(browser, tmp_path / headlined.page / "index.html")
+    page, log = open_ready_page(browser, tmp_path / headlined.page / "index.html")
     headline = page.locator('#headlines p.headline[data-kind="speedup"]')
     assert shown["paper"] in _text(headline)
     assert all(part in _text(headline.locator(".hardware")) for part in expected["paper"])
