@@ -28,6 +28,7 @@ from harness.compare.budget import flux_budget, side_budgets
 from harness.compare.evaluate import exposure_for, score_view
 from harness.compare.regions import caustic_region, object_mask, object_region
 from harness.compare.timed import TimedRender
+from renderers.mitsuba.noise import relative_noise_per_channel
 from renderers.results import RenderResult
 from reports.display import difference_range, luminance
 from reports.records import FluxBudgets, MetricValue
@@ -187,12 +188,12 @@ def scored_caustic(method: np.ndarray, independent: np.ndarray) -> np.ndarray:
 
 def relative_noise(reference: np.ndarray, variance: np.ndarray, mask: np.ndarray
                    ) -> list[float]:
-    """The reference's relative noise per channel over ``mask``: sqrt(Σ v_c) / Σ R_c,
-    the relative standard error of the region's flux in channel c (v the variance of
-    the mean per texel)."""
-    flux = np.asarray(reference, np.float64)[mask].sum(axis=0)
-    spread = np.sqrt(np.asarray(variance, np.float64)[mask].sum(axis=0))
-    return [float(s / f) if f > 0 else float("nan") for s, f in zip(spread, flux, strict=True)]
+    """The reference's relative noise per channel over ``mask``: the root mean square of
+    each texel's standard error over its value (``v`` the variance of the mean), the
+    measure the reference's noise target uses
+    (:func:`renderers.mitsuba.noise.relative_noise_per_channel`), here over the region
+    the comparison scores."""
+    return [float(x) for x in relative_noise_per_channel(reference, variance, mask)]
 
 
 def _score_views(views: list[View], *, seeds: int | None, channel_correlation: float):
