@@ -14,8 +14,10 @@ from tests.conftest import REPO
 
 FIRST_PARTY = {"harness", "renderers", "reports", "scenes"}
 #: Imported only inside functions that need an optional extra, with the message
-#: naming the extra (pymeshlab: the bunny).
-OPTIONAL = {"pymeshlab": "bunny", "pyluxcore": "crosscheck"}
+#: naming the extra (pymeshlab: the bunny); or only where that extra runs: pytest by
+#: the pytest plugin (harness/pytest_plugin.py), which pytest itself loads through its
+#: ``pytest11`` entry point.
+OPTIONAL = {"pymeshlab": "bunny", "pyluxcore": "crosscheck", "pytest": "test"}
 
 
 def _name(requirement: str) -> str:

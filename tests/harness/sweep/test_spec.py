@@ -17,6 +17,7 @@ from harness.sweep.spec import (
     load_sweep,
     parse_sweep,
 )
+from renderers.methods import available_methods
 from scenes import SCENES_DIR
 
 from .conftest import small_scene, write_sweep
@@ -106,8 +107,10 @@ def test_scene_and_method_names_are_checked_after_the_tables(tmp_path):
     problems = {(p.file, p.path): p.message for p in caught.value.problems}
     assert problems[("s.toml", "sweep.scenes[1]")].startswith(
         "no such file, and no bundled scene of that name (bundled: ")
+    # Every registered method is listed (this project's presets, and any plug-in the
+    # environment installs, as the example project in the test env).
     assert problems[("s.toml", "sweep.methods[0]")] == (
-        "unknown method 'no-such-method' (registered: paper, strong)")
+        f"unknown method 'no-such-method' (registered: {', '.join(available_methods())})")
     scene_file = str(tmp_path / "glass_sphere.toml")
     assert problems[(scene_file, "objects[0].material.ior")] == "must be >= 1, got 0.5"
 
