@@ -23,20 +23,30 @@ class ExrError(HarnessError, ValueError):
     """An EXR file is missing, truncated, corrupt, or lacks a channel."""
 
 
-def write_exr(path: str | Path, layers: dict[str, np.ndarray]) -> None:
-    """Write float32 layers to ``path`` atomically (ZIP compression).
+def write_exr(path: str | Path, layers: dict[str, np.ndarray], *, half: bool = False) -> None:
+    """Write float layers to ``path`` atomically (ZIP compression).
 
     Parameters
     ----------
     layers
         Name to array: (H, W, 3) arrays become ``NAME.R/G/B`` (``RGB`` becomes
         ``R, G, B``), (H, W) arrays one channel. All must share H and W.
+    half
+        Store 16-bit floats (for bounded maps such as SSIM and FLIP: about a third of
+        the size); the values must lie within half's finite range, ±65504. Otherwise
+        32-bit floats.
     """
     path = Path(path)
     shapes = {a.shape[:2] for a in layers.values()}
     if len(shapes) != 1:
         raise ValueError(f"layers differ in size: {sorted(shapes)}")
-    channels = {name: np.ascontiguousarray(a, dtype=np.float32) for name, a in layers.items()}
+    dtype = np.float16 if half else np.float32
+    channels = {}
+    for name, a in layers.items():
+        with np.errstate(over="ignore"):  # an overflow is the error raised below
+            channels[name] = np.ascontiguousarray(a, dtype=dtype)
+        if half and not np.all(np.isfinite(channels[name])):
+            raise ValueError(f"{path}: layer {name} does not fit half precision (±65504)")
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     # OpenEXR keeps the mode of the file it writes into: atomic_path's, that of a
     # plain open(), like every other output.

@@ -23,8 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["CLIP_ABOVE", "CLIP_BELOW", "DIFF_RANGE_FRACTION", "DIFF_RANGE_PERCENTILE",
-           "DIFF_RANGE_RULE", "UNDEFINED", "difference_range", "false_colour", "luminance",
-           "srgb_encode", "tonemap", "white_point"]
+           "DIFF_RANGE_RULE", "MARKED_LEVELS", "UNDEFINED", "difference_range", "false_colour",
+           "luminance", "srgb_encode", "tonemap", "white_point"]
 
 #: Rec. 709 luma weights for linear RGB.
 LUMA = np.array([0.2126, 0.7152, 0.0722])
@@ -41,6 +41,9 @@ DIFF_RANGE_RULE = (f"{100 * DIFF_RANGE_FRACTION:g} % of the reference's "
 CLIP_ABOVE = (255, 0, 255)
 CLIP_BELOW = (0, 200, 0)
 UNDEFINED = (128, 128, 128)
+#: Levels of a colormap whose map marks clipped values: with the three marker colours
+#: a map has at most 256 colours, one palette.
+MARKED_LEVELS = 256 - 3
 
 
 def luminance(image: np.ndarray) -> np.ndarray:
@@ -95,14 +98,18 @@ def false_colour(values: np.ndarray, *, vmin: float, vmax: float,
     ``vmin``/``vmax`` must label the colour bar drawn beside it. Without
     ``mark_clipped`` values beyond the scale take its end colours and NaN the colour
     of 0; with it they are drawn in :data:`CLIP_ABOVE` (> ``vmax``),
-    :data:`CLIP_BELOW` (< ``vmin``) and :data:`UNDEFINED` (NaN).
+    :data:`CLIP_BELOW` (< ``vmin``) and :data:`UNDEFINED` (NaN), and the colormap is
+    sampled at 253 levels, so that its levels and the three markers fit a 256-colour
+    palette (``reports.images.encode_png`` stores such a map losslessly as one); draw
+    its colour bar with ``mark_clipped`` too, so that both use the same levels.
     """
     from matplotlib import colormaps  # noqa: PLC0415 - heavy, only when false colour is drawn
 
     if not vmax > vmin:
         raise ValueError(f"need vmax > vmin, got [{vmin}, {vmax}]")
     scaled = (np.nan_to_num(np.asarray(values, np.float64)) - vmin) / (vmax - vmin)
-    rgba = colormaps[colormap](np.clip(scaled, 0.0, 1.0))
+    cmap = colormaps[colormap].resampled(MARKED_LEVELS) if mark_clipped else colormaps[colormap]
+    rgba = cmap(np.clip(scaled, 0.0, 1.0))
     rgb = (rgba[..., :3] * 255 + 0.5).astype(np.uint8)
     if mark_clipped:
         raw = np.asarray(values, np.float64)

@@ -48,11 +48,23 @@ COLORMAPS = {"signed": "RdBu_r", "ssim": "viridis", "flip": "magma"}
 IRRADIANCE_COLORMAP = "inferno"
 
 
-def encode_png(rgb: np.ndarray, *, compress_level: int = 6) -> bytes:
-    """PNG bytes of a uint8 (H, W, 3) or (H, W) array (no gamma or colour chunks)."""
+def encode_png(rgb: np.ndarray, *, compress_level: int = 6, palette: bool = False) -> bytes:
+    """PNG bytes of a uint8 (H, W, 3) or (H, W) array (no gamma or colour chunks).
+
+    With ``palette``, an RGB image of at most 256 distinct colours (a false-colour
+    map: one colormap's levels and the clip markers) is stored as a palette image,
+    losslessly: the same pixels in about a third of the bytes. Data images that a
+    canvas decodes (RGBE stacks) stay RGB.
+    """
     array = np.ascontiguousarray(rgb, dtype=np.uint8)
     buffer = io.BytesIO()
-    Image.fromarray(array).save(buffer, format="PNG", compress_level=compress_level)
+    image = Image.fromarray(array)
+    if palette and array.ndim == 3:
+        colours, index = np.unique(array.reshape(-1, 3), axis=0, return_inverse=True)
+        if len(colours) <= 256:
+            image = Image.fromarray(index.reshape(array.shape[:2]).astype(np.uint8))
+            image.putpalette(colours.tobytes())
+    image.save(buffer, format="PNG", compress_level=compress_level)
     return buffer.getvalue()
 
 
@@ -140,14 +152,16 @@ def false_colour_png(values: np.ndarray, *, kind: str, vmin: float, vmax: float)
     linear combination, so its sign survives.
     """
     scalar = luminance(values) if np.ndim(values) == 3 else np.asarray(values, np.float64)
-    return encode_png(false_colour(scalar, vmin=vmin, vmax=vmax, colormap=COLORMAPS[kind]))
+    return encode_png(false_colour(scalar, vmin=vmin, vmax=vmax, colormap=COLORMAPS[kind]),
+                      palette=True)
 
 
 def colour_bar_png(*, kind: str, vmin: float, vmax: float, width: int = 256,
                    height: int = 12) -> bytes:
     """A horizontal colour bar (vmin on the left) drawn with :func:`false_colour`."""
     ramp = np.linspace(vmin, vmax, width)[None, :].repeat(height, axis=0)
-    return encode_png(false_colour(ramp, vmin=vmin, vmax=vmax, colormap=COLORMAPS[kind]))
+    return encode_png(false_colour(ramp, vmin=vmin, vmax=vmax, colormap=COLORMAPS[kind]),
+                      palette=True)
 
 
 def mask_png(caustic: np.ndarray | None, obj: np.ndarray | None, shape) -> bytes:

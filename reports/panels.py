@@ -263,9 +263,11 @@ def _map_panel(assets: Assets, view: str, kind: str, values: np.ndarray, *, vmin
         "kind": kind, "title": title, "label": label, "vmin": vmin, "vmax": vmax,
         "note": note, "clip": None, "missing": None,
         "src": assets.add(f"{view}_{kind}.png", images.encode_png(false_colour(
-            scalar, vmin=vmin, vmax=vmax, colormap=colormap, mark_clipped=marked))),
+            scalar, vmin=vmin, vmax=vmax, colormap=colormap, mark_clipped=marked),
+            palette=True)),
         "bar": assets.add(f"colourbar_{kind}_{view}.png", images.encode_png(false_colour(
-            ramp, vmin=vmin, vmax=vmax, colormap=colormap))),
+            ramp, vmin=vmin, vmax=vmax, colormap=colormap, mark_clipped=marked),
+            palette=True)),
     }
     if marked:
         share = (clip["count"] / clip["total"] if clip.get("total") else float("nan")) \

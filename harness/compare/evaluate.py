@@ -114,7 +114,7 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
     -------
     values, maps
         The metric values, and ``{"<view>/signed", "<view>/ssim", "<view>/flip"}``
-        maps over the full image.
+        maps over the full image (float32; SSIM and FLIP rounded to half precision).
     """
     _, ssim_map = structural_similarity(method, reference, white=exposure.white, return_map=True)
     _, flip_map = flip_error(flip_input(method), reference, start_exposure=exposure.flip_start,
@@ -137,7 +137,11 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
             excess = metric_excess(metric, method, reference, mask, inputs,
                                    maps={"ssim": ssim_map, "flip": flip_map})
             values.append(MetricValue(view, region, metric, value, floor, **excess))
+    # SSIM and FLIP lie in [-1, 1] and [0, 1]: their maps are kept (and written,
+    # ``harness.compare.outputs``) at half precision, absolute error at most 2.4e-4,
+    # so the file, the page's data and the record hold the same values. The metrics
+    # above used the full-precision maps.
     maps = {f"{view}/signed": signed_difference(method, reference).astype(np.float32),
-            f"{view}/ssim": ssim_map.astype(np.float32),
-            f"{view}/flip": flip_map.astype(np.float32)}
+            f"{view}/ssim": ssim_map.astype(np.float16).astype(np.float32),
+            f"{view}/flip": flip_map.astype(np.float16).astype(np.float32)}
     return values, maps

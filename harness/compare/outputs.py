@@ -17,7 +17,11 @@ from renderers.exr import write_exr
 from reports.records import METRIC_FORMULAS, SceneComparison, Table
 from scenes.files import atomic_write_bytes, dumps_strict
 
-__all__ = ["budget_table", "comparison_json", "write_comparison", "write_json", "write_table"]
+__all__ = ["HALF_MAPS", "budget_table", "comparison_json", "write_comparison", "write_json",
+           "write_table"]
+
+#: Map kinds written as 16-bit floats: bounded, and kept at that precision.
+HALF_MAPS = frozenset({"ssim", "flip"})
 
 
 def write_json(path: str | Path, data: Any) -> None:
@@ -103,8 +107,10 @@ def write_comparison(scene_dir: str | Path, comparison: SceneComparison) -> None
     scene_dir = Path(scene_dir)
     for key, name in comparison.files.items():
         image = comparison.images[key]
-        # A map (SSIM, FLIP) is one channel, Y; an image is RGB.
-        write_exr(scene_dir / name, {"RGB" if image.ndim == 3 else "Y": image})
+        # A map (SSIM, FLIP) is one channel, Y, held at half precision
+        # (``harness.compare.evaluate.score_view``); an image is RGB, float32.
+        write_exr(scene_dir / name, {"RGB" if image.ndim == 3 else "Y": image},
+                  half=key.rsplit("/", 1)[-1] in HALF_MAPS)
     for section in comparison.sections:
         for name, table in section.tables().items():
             write_table(scene_dir / name, table)

@@ -30,6 +30,21 @@ def test_layers_round_trip_bit_for_bit(tmp_path):
     np.testing.assert_array_equal(layers["variance"], var)
 
 
+def test_half_layers_hold_the_half_rounded_values(tmp_path):
+    """A ``half`` file holds each value rounded to half precision (what a bounded map
+    such as SSIM keeps), in fewer bytes; a value beyond half's range is an error, never
+    an infinity in the file."""
+    values = np.random.default_rng(2).random((64, 64), dtype=np.float32)
+    write_exr(tmp_path / "h.exr", {"Y": values}, half=True)
+    write_exr(tmp_path / "f.exr", {"Y": values})
+    np.testing.assert_array_equal(read_exr(tmp_path / "h.exr")["Y"],
+                                  values.astype(np.float16).astype(np.float32))
+    assert (tmp_path / "h.exr").stat().st_size < (tmp_path / "f.exr").stat().st_size
+    with pytest.raises(ValueError, match="half precision"):
+        write_exr(tmp_path / "big.exr", {"Y": values * 1e5}, half=True)
+    assert not (tmp_path / "big.exr").exists()
+
+
 @pytest.mark.usefixtures("umask_022")
 def test_an_exr_gets_the_mode_of_a_normally_written_file(tmp_path):
     """Not mkstemp's 0600: the mode open() gives under the umask (0644 here)."""

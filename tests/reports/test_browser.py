@@ -88,7 +88,10 @@ class PageLog:
         return url.startswith(("file:", "data:"))
 
     def _request(self, request) -> None:
-        self.requests.append(request.url[:100])
+        # A file's URL whole (a test matches it by its name, and a temporary folder
+        # under xdist is long); a data: URI cut, it can be megabytes.
+        url = request.url
+        self.requests.append(url[:100] if url.startswith("data:") else url)
         if not self._local(request.url):
             self.external.append(request.url)
 

@@ -48,7 +48,7 @@ def test_downsample_keeps_the_mean_and_reports_the_factor():
 def test_colour_bar_ends_match_the_map_colours():
     """The bar's left and right columns are the colours of vmin and vmax."""
     png = images.colour_bar_png(kind="signed", vmin=-2.0, vmax=2.0, width=64, height=4)
-    bar = np.asarray(Image.open(io.BytesIO(png)))
+    bar = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
     ends = false_colour(np.array([[-2.0, 2.0]]), vmin=-2.0, vmax=2.0, colormap="RdBu_r")
     assert np.array_equal(bar[0, 0], ends[0, 0]) and np.array_equal(bar[0, -1], ends[0, 1])
 
@@ -59,5 +59,30 @@ def test_signed_rgb_difference_keeps_its_sign_in_false_colour():
     values[0, 0] = 1.0
     values[0, 1] = -1.0
     rgb = np.asarray(Image.open(io.BytesIO(
-        images.false_colour_png(values, kind="signed", vmin=-1, vmax=1))))
+        images.false_colour_png(values, kind="signed", vmin=-1, vmax=1))).convert("RGB"))
     assert rgb[0, 0, 0] > rgb[0, 0, 2] and rgb[0, 1, 2] > rgb[0, 1, 0]
+
+
+def test_a_marked_false_colour_map_is_a_lossless_palette_png():
+    """Regression lock on the page's weight: a map with clip markers has at most 256
+    colours (:data:`reports.display.MARKED_LEVELS` levels and three markers), so it is
+    stored as a palette PNG that decodes to exactly the same pixels, in fewer bytes
+    than the RGB encoding."""
+    rng = np.random.default_rng(5)
+    values = rng.normal(0.0, 1.0, (96, 128))
+    values[0, 0] = np.nan
+    rgb = false_colour(values, vmin=-2.0, vmax=2.0, colormap="coolwarm", mark_clipped=True)
+    assert 200 < len(np.unique(rgb.reshape(-1, 3), axis=0)) <= 256
+    png = images.encode_png(rgb, palette=True)
+    decoded = Image.open(io.BytesIO(png))
+    assert decoded.mode == "P"
+    assert np.array_equal(np.asarray(decoded.convert("RGB")), rgb)
+    assert len(png) < len(images.encode_png(rgb))
+
+
+def test_an_image_of_many_colours_stays_rgb_under_palette():
+    """Physical requirement of the encoding: no colour is ever merged. An image of
+    more than 256 colours is written as RGB, pixels unchanged."""
+    rgb = np.random.default_rng(6).integers(0, 256, (20, 30, 3), dtype=np.uint8)
+    decoded = Image.open(io.BytesIO(images.encode_png(rgb, palette=True)))
+    assert decoded.mode == "RGB" and np.array_equal(np.asarray(decoded), rgb)
