@@ -172,23 +172,6 @@ float hit_tolerance(vec3 p, vec3 n) {
     return map_texel_width(p, u_positions_size) / max(abs(dot(n, incident_dir(p))), 0.1);
 }
 
-// bilinear_at (common.glsl) on a single W x H image instead of a square atlas face.
-Bilinear bilinear_rect(sampler2D tagged, ivec2 size, vec2 pix) {
-    Bilinear b;
-    vec2 q = clamp(pix - 0.5, vec2(0.0), vec2(size - 1));
-    ivec2 i0 = min(ivec2(floor(q)), max(size - 2, ivec2(0)));
-    b.f = q - vec2(i0);
-    b.t00 = i0;
-    b.nearest = min(ivec2(floor(pix)), size - 1);
-    float w00 = texelFetch(tagged, b.t00, 0).w;
-    float w10 = texelFetch(tagged, b.t00 + ivec2(1, 0), 0).w;
-    float w01 = texelFetch(tagged, b.t00 + ivec2(0, 1), 0).w;
-    float w11 = texelFetch(tagged, b.t00 + ivec2(1, 1), 0).w;
-    b.ok = size.x >= 2 && size.y >= 2 && w00 > 0.5 && abs(w10 - w00) < 0.5
-        && abs(w01 - w00) < 0.5 && abs(w11 - w00) < 0.5;
-    return b;
-}
-
 // B(x): the back face of object u_object that the camera sees through x, position p
 // (w: object + 1) and unit outward normal n; false where there is none.
 bool back_at(vec3 x, out vec4 p, out vec3 n) {
@@ -198,7 +181,7 @@ bool back_at(vec3 x, out vec4 p, out vec3 n) {
     if (!project(u_vp, x, ndc)) return false;
     vec2 pix = (ndc * 0.5 + 0.5) * vec2(u_viewport);
     if (FILTERED == 1) {
-        Bilinear b = bilinear_rect(u_back_positions, u_viewport, pix);
+        Bilinear b = bilinear_block(u_back_positions, ivec2(0), u_viewport, pix);
         p = bilinear_read(u_back_positions, b);
         n = bilinear_read(u_back_normals, b).xyz;
         if (dot(n, n) > 0.0) n = normalize(n);

@@ -90,25 +90,34 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
     ctx.enable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
     ctx.blend_func = moderngl.ONE, moderngl.ONE
     ctx.blend_equation = moderngl.FUNC_ADD
+    resources = pool(ctx)
     arrays = []
     for trace in traces:
         views = trace.count // (options.grid * options.grid)
         quads = views * (options.grid - 1) ** 2
-        arrays.append((trace, _record_vertex_array(gaussians, trace), quads,
-                       ctx.vertex_array(programs[-1], []) if len(programs) > 1 else None))
+        triangles = flags = None
+        if len(programs) > 1 and quads > 0:
+            triangles = ctx.vertex_array(programs[-1], [])
+            flags = resources.buffer(4 * quads)
+        arrays.append((trace, _record_vertex_array(gaussians, trace), quads, triangles, flags))
     for k in range(passes):
         if before_pass is not None:
             before_pass(k, programs)
-        for trace, points, quads, triangles in arrays:
+        for trace, points, quads, triangles, flags in arrays:
             trace.records.bind_to_storage_buffer(0)
-            points.render(moderngl.POINTS, vertices=trace.count)
-            if triangles is not None and quads > 0:
+            if triangles is not None:
+                # The triangles first: they record which quads they draw, and a
+                # vertex's Gaussian carries the quarters of the others.
+                flags.bind_to_storage_buffer(1)
                 triangles.render(moderngl.POINTS, vertices=quads)
+                ctx.memory_barrier()
+            points.render(moderngl.POINTS, vertices=trace.count)
     ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
-    for _, points, _, triangles in arrays:
+    for _, points, _, triangles, flags in arrays:
         points.release()
         if triangles is not None:
             triangles.release()
+            resources.give_back(flags)
 
 
 def splat_caustic_map(

@@ -63,6 +63,7 @@ uniform vec3 u_absorption[8];   // K_a (1/m)
 uniform vec3 u_reflectance[8];
 uniform int u_fresnel[8];
 uniform float u_extent[8];      // bounding-box diagonal (m): re-entry test length
+uniform int u_convex[8];        // 1: a convex body, which no ray leaving it meets again
 uniform int u_channel;          // -1: all channels; c: this pass carries channel c only
 
 uniform int u_paper;            // 1: the paper's Eq. 6 flux, (N.L) / V
@@ -434,7 +435,7 @@ void main() {
         v = exit_point;
         r = r2;
         flux *= exp(-u_absorption[object] * inside);  // Eq. 7 inside the solid
-        if (u_verify == 1 && reenters(v, r, object)) {
+        if (u_verify == 1 && u_convex[object] == 0 && reenters(v, r, object)) {
             for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
             write_record(base, v, float(view), r, 0.0, v, STATUS_REENTERED, flux, -1.0,
                          vec3(0.0));
@@ -473,7 +474,7 @@ void main() {
             // short of it within the tolerance: a ray that meets the object within a
             // texel of the receiver (bowl_sun's bottom, 1.3 % of its flux, all in one
             // spot under the bowl) crosses it only there.
-            else if (material == 3
+            else if (material == 3 && u_convex[object] == 0
                      && reflection_blocked(v, r, max(d, dot(t.xyz - v, normal) / dot(r, normal)),
                                            object, abs(dot(r, n)) > GRAZING))
                 status = STATUS_REENTERED;

@@ -104,7 +104,10 @@ class MaterialTable:
     ``code``: 0 no caustic (diffuse), 1 closed dielectric (double refraction),
     2 open dielectric (single refraction), 3 conductor (reflection). ``extent``: the
     diagonal of each object's bounding box (m), the length over which a verified
-    exit ray is tested for re-entering its object (empty: no test).
+    exit ray is tested for re-entering its object (empty: no test). ``convex``: 1 for
+    an object that bounds a convex body (:func:`.meshes.convex`), which no ray leaving
+    it meets again, so verified hits skip the re-entry and blocked-reflection tests
+    there (exact; empty: none is).
     """
 
     code: tuple[int, ...]
@@ -113,12 +116,15 @@ class MaterialTable:
     reflectance: tuple[tuple[float, float, float], ...]
     fresnel: tuple[int, ...]
     extent: tuple[float, ...] = ()
+    convex: tuple[int, ...] = ()
 
 
 def material_table(materials, closed: list[bool], effects: tuple[str, ...], *,
-                   extent: tuple[float, ...] = ()) -> MaterialTable:
+                   extent: tuple[float, ...] = (),
+                   convex: tuple[bool, ...] = ()) -> MaterialTable:
     """Build the table from the objects' materials; Fresnel only with the effect;
-    ``extent`` the objects' bounding-box diagonals (m), if known."""
+    ``extent`` the objects' bounding-box diagonals (m), ``convex`` whether each bounds
+    a convex body, if known."""
     if len(materials) > MAX_OBJECTS:
         raise ValueError(f"at most {MAX_OBJECTS} caustic objects are supported")
     code, ior, absorption, reflectance, fresnel = [], [], [], [], []
@@ -142,7 +148,8 @@ def material_table(materials, closed: list[bool], effects: tuple[str, ...], *,
             reflectance.append((0.0,) * 3)
             fresnel.append(0)
     return MaterialTable(tuple(code), tuple(ior), tuple(absorption), tuple(reflectance),
-                         tuple(fresnel), tuple(float(e) for e in extent))
+                         tuple(fresnel), tuple(float(e) for e in extent),
+                         tuple(int(c) for c in convex))
 
 
 @dataclass(eq=False)
@@ -231,6 +238,8 @@ def run_caustic_trace(
     set_uniform(program, "u_fresnel", np.array(materials.fresnel + (0,) * pad, np.int32))
     extent = materials.extent or (0.0,) * len(materials.code)
     set_uniform(program, "u_extent", np.array(extent + (0.0,) * pad, np.float32))
+    convex = materials.convex or (0,) * len(materials.code)
+    set_uniform(program, "u_convex", np.array(convex + (0,) * pad, np.int32))
     for name, value in (
         ("u_positions_size", positions.size), ("u_grid", grid),
         ("u_back_size", back_size or grid), ("u_channel", channel),

@@ -156,32 +156,41 @@ struct Bilinear {
     vec2 f;           // blend weights along x and y
     ivec2 nearest;    // atlas texel containing pix
     bool ok;          // blend (else read `nearest`)
+    float tag;        // with ok: the four texels' common tag (the nearest one's)
 };
 
-Bilinear bilinear_at(sampler2D tagged, int slot, int size, vec2 pix) {
+// bilinear_at on the W x H block of texels from `base` (an atlas face or a whole
+// image).
+Bilinear bilinear_block(sampler2D tagged, ivec2 base, ivec2 size, vec2 pix) {
     Bilinear b;
-    vec2 q = clamp(pix - 0.5, vec2(0.0), vec2(float(size - 1)));
-    ivec2 i0 = min(ivec2(floor(q)), ivec2(size - 2));
+    vec2 q = clamp(pix - 0.5, vec2(0.0), vec2(size - 1));
+    ivec2 i0 = min(ivec2(floor(q)), max(size - 2, ivec2(0)));
     b.f = q - vec2(i0);
-    ivec2 base = ivec2(slot * size, 0);
     b.t00 = base + i0;
-    b.nearest = base + min(ivec2(floor(pix)), ivec2(size - 1));
+    b.nearest = base + min(ivec2(floor(pix)), size - 1);
     float w00 = texelFetch(tagged, b.t00, 0).w;
     float w10 = texelFetch(tagged, b.t00 + ivec2(1, 0), 0).w;
     float w01 = texelFetch(tagged, b.t00 + ivec2(0, 1), 0).w;
     float w11 = texelFetch(tagged, b.t00 + ivec2(1, 1), 0).w;
-    b.ok = size >= 2 && w00 > 0.5 && abs(w10 - w00) < 0.5 && abs(w01 - w00) < 0.5
-        && abs(w11 - w00) < 0.5;
+    b.ok = size.x >= 2 && size.y >= 2 && w00 > 0.5 && abs(w10 - w00) < 0.5
+        && abs(w01 - w00) < 0.5 && abs(w11 - w00) < 0.5;
+    b.tag = w00;
     return b;
 }
 
+Bilinear bilinear_at(sampler2D tagged, int slot, int size, vec2 pix) {
+    return bilinear_block(tagged, ivec2(slot * size, 0), ivec2(size), pix);
+}
+
+// `tex` read through b: blended, or the nearest texel. A blended read's w is the
+// common tag (exact for a tagged image; a companion image's w is not used).
 vec4 bilinear_read(sampler2D tex, Bilinear b) {
     if (!b.ok) return texelFetch(tex, b.nearest, 0);
     vec4 a = mix(texelFetch(tex, b.t00, 0), texelFetch(tex, b.t00 + ivec2(1, 0), 0), b.f.x);
     vec4 c = mix(texelFetch(tex, b.t00 + ivec2(0, 1), 0),
                  texelFetch(tex, b.t00 + ivec2(1, 1), 0), b.f.x);
     vec4 r = mix(a, c, b.f.y);
-    r.w = texelFetch(tex, b.nearest, 0).w;   // the tag is never blended
+    r.w = b.tag;                       // the tag is never blended
     return r;
 }
 

@@ -33,7 +33,7 @@ from renderers.caustics_mapping.estimators import MapLookup
 from renderers.caustics_mapping.footprint import FALLBACK_TEXELS, mean_hit_spacing_texels
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.lowpass import lowpass_filter
-from renderers.caustics_mapping.meshes import upload_mesh
+from renderers.caustics_mapping.meshes import convex, upload_mesh
 from renderers.caustics_mapping.object_positions import render_object_surfaces
 from renderers.caustics_mapping.receiver_positions import render_receiver_positions
 from renderers.caustics_mapping.receiver_splat import splat_receiver_map, uv_mapping
@@ -124,7 +124,10 @@ def scene_setup(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry, *,
     materials = material_table(
         [g.material for g in geometry.objects], [g.mesh.closed for g in geometry.objects],
         effects, extent=tuple(float(np.linalg.norm(np.ptp(g.mesh.positions, axis=0)))
-                              for g in geometry.objects))
+                              for g in geometry.objects),
+        # Only verified hits test re-entry, so only they need to know convexity.
+        convex=tuple(bool(scene.settings.verify_hits) and convex(g.mesh)
+                     for g in geometry.objects))
     return SceneSetup(
         receivers=[upload_mesh(ctx, g.mesh) for g in geometry.receivers],
         objects=[upload_mesh(ctx, g.mesh) for g in geometry.objects],

@@ -189,7 +189,12 @@ def _tight_rect(x: np.ndarray, y: np.ndarray) -> tuple[float, tuple[float, ...]]
     """The rotation about the view axis (radians, 1-degree steps over a quarter
     turn) whose axis-aligned bounding rectangle of the points (x, y) on the view
     plane is smallest, and that rectangle (x0, x1, y0, y1) with a 0.1 % margin (the
-    vertices bound the projection of the triangles exactly; the margin is for rounding)."""
+    vertices bound the projection of the triangles exactly; the margin is for rounding).
+
+    A linear function's extremes over the points lie on their convex hull, so the
+    search runs over the hull's vertices only (234 of a sphere's 10,242: 2 ms a frame
+    instead of 6)."""
+    x, y = _hull_points(np.asarray(x, float), np.asarray(y, float))
     angles = np.radians(np.arange(0.0, 90.0, 1.0))
     c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
     xr, yr = c * x - s * y, s * x + c * y
@@ -200,6 +205,20 @@ def _tight_rect(x: np.ndarray, y: np.ndarray) -> tuple[float, tuple[float, ...]]
     pad = 1e-3 * (hi - lo) + 1e-9
     lo, hi = lo - pad, hi + pad
     return float(angles[best]), (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]))
+
+
+def _hull_points(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The vertices of the convex hull of the points (x, y), or all of them where they
+    have no hull of positive area (fewer than three, or all on one line)."""
+    from scipy.spatial import ConvexHull, QhullError  # noqa: PLC0415 - scipy loads only here
+
+    if len(x) < 4:
+        return x, y
+    try:
+        index = ConvexHull(np.column_stack([x, y])).vertices
+    except QhullError:       # collinear or coincident points: every point is extreme
+        return x, y
+    return x[index], y[index]
 
 
 def _rotate_about_view_axis(view: np.ndarray, angle: float) -> np.ndarray:

@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 
 import moderngl
 import numpy as np
 
 from scenes.geometry import TriangleMesh
+from scenes.geometry.mesh import is_convex
 
-__all__ = ["GpuMesh", "back_faces_hidden", "upload_mesh"]
+__all__ = ["GpuMesh", "back_faces_hidden", "convex", "upload_mesh"]
+
+#: Convexity of meshes seen so far, by content (a render rebuilds its meshes).
+_CONVEX: dict[bytes, bool] = {}
+_CONVEX_KEPT = 64
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +67,22 @@ def back_faces_hidden(mesh: TriangleMesh, view_proj: np.ndarray) -> bool:
     clip = p @ view_proj[:3, :3].T + view_proj[:3, 3]
     w = p @ view_proj[3, :3] + view_proj[3, 3]
     return bool(np.all(clip[:, 2] + w > 1e-6 * np.abs(w) + 1e-300))
+
+
+def convex(mesh: TriangleMesh) -> bool:
+    """:func:`scenes.geometry.mesh.is_convex`, remembered by the mesh's content: the
+    test takes 25 ms on a 20,480-face sphere and 0.1 s on the bunny, and a render
+    rebuilds its meshes every frame."""
+    digest = hashlib.blake2b(digest_size=16)
+    for array in (mesh.positions, mesh.faces):
+        digest.update(np.ascontiguousarray(array).tobytes())
+    digest.update(bytes([mesh.closed]))
+    key = digest.digest()
+    if key not in _CONVEX:
+        if len(_CONVEX) >= _CONVEX_KEPT:
+            _CONVEX.pop(next(iter(_CONVEX)))
+        _CONVEX[key] = is_convex(mesh)
+    return _CONVEX[key]
 
 
 def upload_mesh(ctx: moderngl.Context, mesh: TriangleMesh) -> GpuMesh:

@@ -56,15 +56,16 @@ bool surface_s(int surface, vec3 v, vec3 r, float d, out float s) {
 int bracket_on(int surface, vec3 v, vec3 r, float start, out float d_out) {
     d_out = 0.0;
     float a = 0.0, sa = 0.0, b = start, sb = 0.0;
-    bool a_known = surface_s(surface, v, r, 0.0, sa);   // s(a) known (else assumed < 0)
+    vec4 t0;                        // the surface seen through v itself (d = 0)
+    bool a_known = surface_at(surface, v, t0);          // s(a) known (else assumed < 0)
+    sa = projection_distance(surface, v) - projection_distance(surface, t0.xyz);
     if (a_known && !(sa < 0.0)) {   // on the surface already (after a reflection there)
         a = 1e-3 * max(start, 0.0);
         a_known = a > 0.0 && surface_s(surface, v, r, a, sa);
         if (a_known && !(sa < 0.0)) return STATUS_LOST;
     }
-    if (!(b > a)) {                 // d_1 = g(0): the surface seen through v itself
-        vec4 t;
-        b = a_known && a == 0.0 && surface_at(surface, v, t) ? length(t.xyz - v) : u_ray_scale;
+    if (!(b > a)) {                 // d_1 = g(0) = |T(v) - v|, from the lookup above
+        b = a_known && a == 0.0 ? length(t0.xyz - v) : u_ray_scale;
         b = max(b, 2.0 * a);
     }
     float a_prev = -1.0, sa_prev = 0.0;     // the known point in front before a

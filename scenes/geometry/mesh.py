@@ -8,7 +8,7 @@ import numpy as np
 
 from scenes.model import Transform
 
-__all__ = ["TriangleMesh", "apply_transform", "make_mesh", "transform_matrix"]
+__all__ = ["TriangleMesh", "apply_transform", "is_convex", "make_mesh", "transform_matrix"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +61,49 @@ class TriangleMesh:
         p = self.positions.astype(np.float64)
         a, b, c = p[self.faces[:, 0]], p[self.faces[:, 1]], p[self.faces[:, 2]]
         return float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
+
+
+def is_convex(mesh: TriangleMesh, *, tolerance: float = 1e-5) -> bool:
+    """Whether a closed mesh bounds a convex body: no ray that leaves it meets it again.
+
+    A connected, closed surface that is convex at every edge bounds a convex body
+    (Tietze's theorem). At each edge the vertex opposite it in the neighbouring face
+    must lie on or behind the face's plane, within ``tolerance`` times the bounding
+    box's diagonal (float32 rounding of coplanar vertices, e.g. a latitude band of a
+    tessellated sphere). An open, non-manifold or disconnected mesh is not convex.
+    """
+    from scipy.sparse import coo_matrix  # noqa: PLC0415 - scipy loads only here
+    from scipy.sparse.csgraph import connected_components  # noqa: PLC0415
+
+    faces = np.asarray(mesh.faces, np.int64)
+    if not mesh.closed or len(faces) < 4:
+        return False
+    p = mesh.positions.astype(np.float64)
+    count = len(p)
+    # Directed edges a -> b of every face (counter-clockwise), with the face's third
+    # vertex; in a closed manifold mesh each has exactly one twin b -> a.
+    a = faces.ravel()
+    b = np.roll(faces, -1, axis=1).ravel()
+    third = np.roll(faces, -2, axis=1).ravel()
+    keys = a * count + b
+    order = np.argsort(keys)
+    twins = b * count + a
+    at = np.searchsorted(keys, twins, sorter=order)
+    at = np.minimum(at, len(keys) - 1)
+    match = order[at]
+    if np.unique(keys).size != keys.size or not np.all(keys[match] == twins):
+        return False
+    normal = np.repeat(np.cross(p[faces[:, 1]] - p[faces[:, 0]],
+                                p[faces[:, 2]] - p[faces[:, 0]]), 3, axis=0)
+    length = np.linalg.norm(normal, axis=1)
+    diagonal = float(np.linalg.norm(np.ptp(p, axis=0)))
+    height = np.einsum("ij,ij->i", p[third[match]] - p[a], normal)
+    if np.any(height > tolerance * diagonal * np.maximum(length, 1e-300)):
+        return False
+    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(count, count))
+    used = np.unique(faces)
+    _, labels = connected_components(graph, directed=False)
+    return len(np.unique(labels[used])) == 1
 
 
 def make_mesh(positions, normals, faces, uvs=None, *, closed: bool = False) -> TriangleMesh:

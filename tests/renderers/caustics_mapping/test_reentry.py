@@ -71,3 +71,21 @@ def test_a_sphere_never_reenters(preset):
     status = render_frame(scene, lookups=False).hits["status"]
     assert (status == STATUS["hit"]).sum() > 100
     assert not (status == STATUS["reentered"]).any()
+
+
+def test_a_convex_object_skips_the_test_and_loses_nothing(monkeypatch):
+    """No ray leaving a convex body meets it again, so the strong preset skips the
+    re-entry test on one (``renderers.caustics_mapping.meshes.convex``): on the glass
+    sphere the test, run anyway, drops no vertex, and the records and the receiver map
+    are the same with and without it."""
+    from renderers.caustics_mapping import light_sample  # noqa: PLC0415 - patched below
+
+    scene = small_scene(ROOT / "scenes" / "glass_sphere.toml", preset="strong")
+    skipped = render_frame(scene, lookups=False)
+    monkeypatch.setattr(light_sample, "convex", lambda mesh: False)
+    tested = render_frame(scene, lookups=False)
+    assert not np.any(tested.hits["status"] == STATUS["reentered"])
+    np.testing.assert_array_equal(skipped.hits["status"], tested.hits["status"])
+    np.testing.assert_array_equal(skipped.hits["hit"], tested.hits["hit"])
+    np.testing.assert_array_equal(skipped.result.receivers[0].irradiance,
+                                  tested.result.receivers[0].irradiance)
