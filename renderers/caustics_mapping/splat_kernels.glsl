@@ -7,8 +7,9 @@
 //              (ray differentials of the grid; Wyman & Dachsbacher 2006, Frisvad et
 //              al. 2014), plus (0.5 px)^2 so no splat falls between pixel centres;
 //   triangles  each grid quad whose four corners all land on the target becomes two
-//              triangles between the hits, of constant irradiance flux / area
-//              (webgl-water; Ernst et al. 2005). A vertex gives a quarter of its flux
+//              triangles between the hits, each holding its share of the quad's flux
+//              (webgl-water; Ernst et al. 2005) at an irradiance linear over it
+//              (splat_triangles.glsl). A vertex gives a quarter of its flux
 //              to each of its four quads; the quarters of quads that cannot be drawn
 //              (a corner missing, on another receiver or face, a fold where the
 //              quad's two triangles have opposite orientation, or a triangle wider
@@ -22,8 +23,8 @@
 //              streaks. Such quads (RIM_STEPS, STRETCH_PX, STRETCH_RATIO) go to round
 //              Gaussians instead.
 // Triangles are drawn exactly: each pixel of a triangle's bounding box gets the
-// triangle's irradiance times the area of the pixel the triangle covers
-// (pixel_coverage), so the pixels' weights sum to the triangle's area.
+// integral of the triangle's irradiance over the part of the pixel it covers
+// (pixel_integrals), so the pixels' values sum to the triangle's flux.
 //
 // The record buffer (caustic_trace.glsl's layout) is read as an SSBO: record i is
 // grid vertex (view, tx, ty) with i = (view * u_grid + ty) * u_grid + tx.
@@ -127,18 +128,10 @@ mat2 footprint_covariance(int view, int tx, int ty, vec2 centre, float fallback_
     return k * (outerProduct(ex, ex) + outerProduct(ey, ey)) + mat2(0.25);
 }
 
-// Whether quad (qx, qy) (corners (qx, qy), (qx+1, qy), (qx+1, qy+1), (qx, qy+1))
-// is drawn as two triangles, and its corners in target pixels.
-bool quad_drawn(int view, int qx, int qy, out vec2 c[4]) {
-    for (int k = 0; k < 4; ++k) c[k] = vec2(0.0);
-    if (qx < 0 || qy < 0 || qx >= u_grid - 1 || qy >= u_grid - 1) return false;
-    int corner[4] = int[4](grid_record(view, qx, qy), grid_record(view, qx + 1, qy),
-                           grid_record(view, qx + 1, qy + 1), grid_record(view, qx, qy + 1));
-    float receiver = splat_records[corner[0] * 5 + 3].w;
-    for (int k = 0; k < 4; ++k) {
-        if (abs(splat_records[corner[k] * 5 + 3].w - receiver) > 0.5) return false;
-        if (!to_target(corner[k], c[k])) return false;
-    }
+// Whether quad (qx, qy) (corners (qx, qy), (qx+1, qy), (qx+1, qy+1), (qx, qy+1)),
+// whose corners all land on one receiver and on the target at pixels c, is drawn as
+// two triangles: not too wide, not a rim sliver, not folded.
+bool quad_shape_drawn(int view, int qx, int qy, vec2 c[4]) {
     vec2 lo = min(min(c[0], c[1]), min(c[2], c[3]));
     vec2 hi = max(max(c[0], c[1]), max(c[2], c[3]));
     if (any(greaterThan(hi - lo, vec2(u_max_triangle)))) return false;
@@ -152,6 +145,20 @@ bool quad_drawn(int view, int qx, int qy, out vec2 c[4]) {
         && (near_silhouette(view, qx, qy) || near_silhouette(view, qx + 1, qy + 1)))
         return false;                         // a rim sliver (see RIM_STEPS)
     return a1 * a2 > 0.0;                     // same orientation, neither degenerate
+}
+
+// Whether quad (qx, qy) is drawn as two triangles, and its corners in target pixels.
+bool quad_drawn(int view, int qx, int qy, out vec2 c[4]) {
+    for (int k = 0; k < 4; ++k) c[k] = vec2(0.0);
+    if (qx < 0 || qy < 0 || qx >= u_grid - 1 || qy >= u_grid - 1) return false;
+    int corner[4] = int[4](grid_record(view, qx, qy), grid_record(view, qx + 1, qy),
+                           grid_record(view, qx + 1, qy + 1), grid_record(view, qx, qy + 1));
+    float receiver = splat_records[corner[0] * 5 + 3].w;
+    for (int k = 0; k < 4; ++k) {
+        if (abs(splat_records[corner[k] * 5 + 3].w - receiver) > 0.5) return false;
+        if (!to_target(corner[k], c[k])) return false;
+    }
+    return quad_shape_drawn(view, qx, qy, c);
 }
 
 // Share of a vertex's flux that its Gaussian carries with triangle splats: the
@@ -226,42 +233,84 @@ float fit_radius(inout mat2 cov, float cut, float max_radius) {
 }
 #endif
 
-// Integral of clamp(x, 0, 1) dy along segment p -> q clipped to 0 <= y <= 1: exact,
-// as clamp(x) is linear between the points where x crosses 0 and 1.
-float edge_integral(vec2 p, vec2 q) {
+// Integrals along segment p -> q, clipped to the strip lo.y <= y <= hi.y, of
+// clamp(x, lo.x, hi.x) dy, clamp(x, lo.x, hi.x)^2 / 2 dy and y clamp(x, lo.x, hi.x) dy:
+// by Green's theorem their sums over a triangle's edges (anticlockwise) are the area
+// and the first moments (x, y) of its part inside the box [lo, hi] (d/dx of
+// clamp(x, lo.x, hi.x) is 1 within the box's x-range and 0 outside it, and the
+// strip's borders have dy = 0). Exact: on
+// each of the pieces where x is below lo.x, within the box and above hi.x the
+// integrands are polynomials of degree at most 2 in the segment's parameter,
+// integrated by Simpson's rule.
+vec3 edge_moments(vec2 p, vec2 q, vec2 lo, vec2 hi) {
     float dy = q.y - p.y;
-    if (dy == 0.0) return 0.0;
-    float t0 = clamp(-p.y / dy, 0.0, 1.0), t1 = clamp((1.0 - p.y) / dy, 0.0, 1.0);
+    if (dy == 0.0) return vec3(0.0);
+    float t0 = clamp((lo.y - p.y) / dy, 0.0, 1.0), t1 = clamp((hi.y - p.y) / dy, 0.0, 1.0);
     float ta = min(t0, t1), tb = max(t0, t1);
-    if (tb <= ta) return 0.0;
+    if (tb <= ta) return vec3(0.0);
     float dx = q.x - p.x;
-    float s0 = dx != 0.0 ? -p.x / dx : ta, s1 = dx != 0.0 ? (1.0 - p.x) / dx : ta;
-    float a = clamp(min(s0, s1), ta, tb), b = clamp(max(s0, s1), ta, tb);
-    float xa = clamp(p.x + 0.5 * (ta + a) * dx, 0.0, 1.0);
-    float xb = clamp(p.x + 0.5 * (a + b) * dx, 0.0, 1.0);
-    float xc = clamp(p.x + 0.5 * (b + tb) * dx, 0.0, 1.0);
-    return dy * ((a - ta) * xa + (b - a) * xb + (tb - b) * xc);
+    float s0 = dx != 0.0 ? (lo.x - p.x) / dx : ta, s1 = dx != 0.0 ? (hi.x - p.x) / dx : ta;
+    float cut[4] = float[4](ta, clamp(min(s0, s1), ta, tb), clamp(max(s0, s1), ta, tb), tb);
+    vec3 total = vec3(0.0);
+    for (int k = 0; k < 3; ++k) {
+        float h = cut[k + 1] - cut[k];
+        if (h <= 0.0) continue;
+        vec3 piece = vec3(0.0);
+        for (int j = 0; j < 3; ++j) {
+            float t = cut[k] + 0.5 * float(j) * h;
+            float x = clamp(p.x + t * dx, lo.x, hi.x), y = p.y + t * dy;
+            piece += (j == 1 ? 4.0 : 1.0) * vec3(x, 0.5 * x * x, y * x);
+        }
+        total += piece * (h / 6.0);
+    }
+    return dy * total;
 }
 
-// Area of the part of triangle (a, b, c) inside the unit pixel [0, 1]^2 (all in
-// pixel units relative to that pixel's lower-left corner). By Green's theorem the
-// area of T within the pixel is |sum over T's edges of the integral of
-// clamp(x, 0, 1) dy over the edge's part in 0 <= y <= 1| (the strip's horizontal
-// borders have dy = 0); pixels wholly inside or outside are decided by the edge
-// functions first.
-float pixel_coverage(vec2 a, vec2 b, vec2 c) {
-    float orientation = sign((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
-    vec2 corners[3] = vec2[3](a, b, c);
-    bool inside = true;
-    for (int i = 0; i < 3; ++i) {
-        vec2 p = corners[i], q = corners[i < 2 ? i + 1 : 0];
-        vec2 e = orientation * vec2(p.y - q.y, q.x - p.x);   // inward normal
-        float at0 = dot(e, -p);                             // at the corner (0, 0)
-        float lowest = at0 + min(e.x, 0.0) + min(e.y, 0.0);
-        float highest = at0 + max(e.x, 0.0) + max(e.y, 0.0);
-        if (highest <= 0.0) return 0.0;                     // wholly outside this edge
-        inside = inside && lowest >= 0.0;
+// The integrals over the part of triangle (a, b, c) inside the unit pixel [0, 1]^2
+// (pixel units relative to its lower-left corner) of 1 (returned: the covered area)
+// and of the barycentric coordinates of b and c (`lambda`; that of a is the area
+// minus both). A linear function with values fa, fb, fc at the corners integrates to
+// fa (area - lambda.x - lambda.y) + fb lambda.x + fc lambda.y over the pixel, so the
+// pixels' integrals sum to the triangle's, its area times (fa + fb + fc) / 3.
+float pixel_integrals(vec2 a, vec2 b, vec2 c, out vec2 lambda) {
+    lambda = vec2(0.0);
+    vec2 u = b - a, w = c - a;
+    float d = u.x * w.y - u.y * w.x;            // twice the signed area
+    if (d == 0.0) return 0.0;
+    float orientation = sign(d);
+    vec2 lo = min(min(a, b), c), hi = max(max(a, b), c);
+    float area;
+    vec2 moment;                                // integral of (x - a) over the part
+    if (all(greaterThanEqual(lo, vec2(0.0))) && all(lessThanEqual(hi, vec2(1.0)))) {
+        area = 0.5 * abs(d);                    // the whole triangle
+        moment = area * (u + w) / 3.0;
+    } else {
+        vec2 corners[3] = vec2[3](a, b, c);
+        bool inside = true;
+        for (int i = 0; i < 3; ++i) {
+            vec2 p = corners[i], q = corners[i < 2 ? i + 1 : 0];
+            vec2 e = orientation * vec2(p.y - q.y, q.x - p.x);   // inward normal
+            float at0 = dot(e, -p);                             // at the corner (0, 0)
+            float lowest = at0 + min(e.x, 0.0) + min(e.y, 0.0);
+            float highest = at0 + max(e.x, 0.0) + max(e.y, 0.0);
+            if (highest <= 0.0) return 0.0;                     // wholly outside this edge
+            inside = inside && lowest >= 0.0;
+        }
+        if (inside) {
+            area = 1.0;
+            moment = vec2(0.5) - a;
+        } else {
+            // Relative to a, so the integrals scale with the triangle, not with its
+            // place in the pixel (tiny triangles at a focus keep their precision).
+            vec2 box_lo = -a, box_hi = vec2(1.0) - a;
+            vec3 m = orientation * (edge_moments(vec2(0.0), u, box_lo, box_hi)
+                                    + edge_moments(u, w, box_lo, box_hi)
+                                    + edge_moments(w, vec2(0.0), box_lo, box_hi));
+            area = m.x;
+            if (!(area > 0.0)) return 0.0;
+            moment = m.yz;
+        }
     }
-    if (inside) return 1.0;
-    return abs(edge_integral(a, b) + edge_integral(b, c) + edge_integral(c, a));
+    lambda = vec2(moment.x * w.y - moment.y * w.x, u.x * moment.y - u.y * moment.x) / d;
+    return area;
 }
