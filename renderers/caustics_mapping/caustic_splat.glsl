@@ -18,7 +18,7 @@ uniform int u_face;          // the face being drawn (viewport and scissor set t
 
 #include "splat_kernels.glsl"
 
-#if defined VERTEX_SHADER || defined GEOMETRY_SHADER
+#if defined VERTEX_SHADER || defined GEOMETRY_SHADER || defined COMPUTE_SHADER
 // The record's hit in atlas pixels, when it is splatted into face u_face.
 bool to_target(int record, out vec2 pix) {
     pix = vec2(0.0);
@@ -39,7 +39,7 @@ vec4 target_position(vec2 pix) {
 #endif
 
 #if defined TRIANGLES
-#if defined GEOMETRY_SHADER
+#if defined GEOMETRY_SHADER || defined COMPUTE_SHADER
 // Area on the receiver of a triangle of hits, measured across the receiver's normal.
 float triangle_area(vec2 a, vec2 b, vec2 c, vec3 pa, vec3 pb, vec3 pc, vec3 n) {
     return 0.5 * abs(dot(cross(pb - pa, pc - pa), n));

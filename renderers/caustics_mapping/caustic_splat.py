@@ -74,8 +74,13 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
     """
     gaussians = load_program(ctx, name)
     programs = [gaussians]
+    stages = ()
     if options.mode == "triangles":
-        programs.append(load_program(ctx, name, defines={"TRIANGLES": 1}, geometry=True))
+        # The quads' and the corners' data first (compute), then the triangles.
+        stages = tuple(load_program(ctx, name, defines={"TRIANGLES": 1, stage: 1},
+                                    compute=True) for stage in ("QUAD_PASS", "CORNER_PASS"))
+        programs += [*stages, load_program(ctx, name, defines={"TRIANGLES": 1},
+                                           geometry=True)]
     for program in programs:
         uniforms(program)
         set_uniform(program, "u_grid", options.grid)
@@ -95,29 +100,37 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
     for trace in traces:
         views = trace.count // (options.grid * options.grid)
         quads = views * (options.grid - 1) ** 2
-        triangles = flags = None
-        if len(programs) > 1 and quads > 0:
+        triangles, buffers = None, ()
+        if stages and quads > 0:
             triangles = ctx.vertex_array(programs[-1], [])
-            flags = resources.buffer(4 * quads)
-        arrays.append((trace, _record_vertex_array(gaussians, trace), quads, triangles, flags))
+            # quad_flags, quad_data, quad_means, corner_data (splat_triangles.glsl)
+            buffers = tuple(resources.buffer(n) for n in
+                            (4 * quads, 16 * quads, 32 * quads, 48 * trace.count))
+        arrays.append((trace, _record_vertex_array(gaussians, trace), quads, triangles,
+                       buffers))
     for k in range(passes):
         if before_pass is not None:
             before_pass(k, programs)
-        for trace, points, quads, triangles, flags in arrays:
+        for trace, points, quads, triangles, buffers in arrays:
             trace.records.bind_to_storage_buffer(0)
             if triangles is not None:
                 # The triangles first: they record which quads they draw, and a
                 # vertex's Gaussian carries the quarters of the others.
-                flags.bind_to_storage_buffer(1)
+                for binding, buffer in enumerate(buffers, start=1):
+                    buffer.bind_to_storage_buffer(binding)
+                for stage, count in zip(stages, (quads, trace.count), strict=True):
+                    set_uniform(stage, "u_count", count)
+                    stage.run(group_x=-(-count // 64))
+                    ctx.memory_barrier()
                 triangles.render(moderngl.POINTS, vertices=quads)
-                ctx.memory_barrier()
             points.render(moderngl.POINTS, vertices=trace.count)
     ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
-    for _, points, _, triangles, flags in arrays:
+    for _, points, _, triangles, buffers in arrays:
         points.release()
         if triangles is not None:
             triangles.release()
-            resources.give_back(flags)
+        for buffer in buffers:
+            resources.give_back(buffer)
 
 
 def splat_caustic_map(

@@ -29,7 +29,7 @@ uniform ivec2 u_map_size;          // W, H
 
 #include "splat_kernels.glsl"
 
-#if defined VERTEX_SHADER || defined GEOMETRY_SHADER
+#if defined VERTEX_SHADER || defined GEOMETRY_SHADER || defined COMPUTE_SHADER
 vec2 uv_span() {                    // umax - umin, vmax - vmin
     return vec2(u_extent.y - u_extent.x, u_extent.w - u_extent.z);
 }
@@ -72,7 +72,7 @@ float texel_area() {                // (u, v) units^2
 #endif
 
 #if defined TRIANGLES
-#if defined GEOMETRY_SHADER
+#if defined GEOMETRY_SHADER || defined COMPUTE_SHADER
 // Surface area of a triangle: its map pixels times the (u, v) area of a pixel times
 // the surface area per (u, v) area at the receiver normal n.
 float triangle_area(vec2 a, vec2 b, vec2 c, vec3 pa, vec3 pb, vec3 pc, vec3 n) {

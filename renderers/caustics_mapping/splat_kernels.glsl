@@ -34,11 +34,12 @@
 //                                            // false if it is not splatted there
 
 layout(std430, binding = 0) readonly buffer SplatRecords { vec4 splat_records[]; };
-#if defined VERTEX_SHADER || defined GEOMETRY_SHADER
+#if defined VERTEX_SHADER || defined GEOMETRY_SHADER || defined COMPUTE_SHADER
 // Triangles: whether each grid quad q = (view * (u_grid - 1) + qy) * (u_grid - 1) + qx
-// is drawn (quad_drawn), written by the triangles' geometry shader, which is drawn
-// first, and read by the Gaussians' vertex shader (gaussian_share): one evaluation
-// per quad instead of four per vertex, which took a third of the splat passes.
+// is drawn (quad_shape_drawn), written by the triangles' quad pass
+// (splat_triangles.glsl), which runs first, and read by the Gaussians' vertex shader
+// (gaussian_share): one evaluation per quad instead of four per vertex, which took a
+// third of the splat passes.
 layout(std430, binding = 1) buffer QuadFlags { int quad_flags[]; };
 #endif
 
@@ -63,7 +64,7 @@ const int RIM_STEPS = 3;
 const float STRETCH_PX = 12.0;
 const float STRETCH_RATIO = 96.0;
 
-#if defined VERTEX_SHADER || defined GEOMETRY_SHADER
+#if defined VERTEX_SHADER || defined GEOMETRY_SHADER || defined COMPUTE_SHADER
 bool to_target(int record, out vec2 pix);
 
 int grid_record(int view, int tx, int ty) {
@@ -145,20 +146,6 @@ bool quad_shape_drawn(int view, int qx, int qy, vec2 c[4]) {
         && (near_silhouette(view, qx, qy) || near_silhouette(view, qx + 1, qy + 1)))
         return false;                         // a rim sliver (see RIM_STEPS)
     return a1 * a2 > 0.0;                     // same orientation, neither degenerate
-}
-
-// Whether quad (qx, qy) is drawn as two triangles, and its corners in target pixels.
-bool quad_drawn(int view, int qx, int qy, out vec2 c[4]) {
-    for (int k = 0; k < 4; ++k) c[k] = vec2(0.0);
-    if (qx < 0 || qy < 0 || qx >= u_grid - 1 || qy >= u_grid - 1) return false;
-    int corner[4] = int[4](grid_record(view, qx, qy), grid_record(view, qx + 1, qy),
-                           grid_record(view, qx + 1, qy + 1), grid_record(view, qx, qy + 1));
-    float receiver = splat_records[corner[0] * 5 + 3].w;
-    for (int k = 0; k < 4; ++k) {
-        if (abs(splat_records[corner[k] * 5 + 3].w - receiver) > 0.5) return false;
-        if (!to_target(corner[k], c[k])) return false;
-    }
-    return quad_shape_drawn(view, qx, qy, c);
 }
 
 // Share of a vertex's flux that its Gaussian carries with triangle splats: the

@@ -1,10 +1,10 @@
 // The triangles program of a splat pass (splat_kernels.glsl, kernel `triangles`),
 // included by caustic_splat.glsl and receiver_splat.glsl under TRIANGLES: one vertex
-// per grid quad; the geometry shader turns a drawn quad into two triangles, each
-// emitted as its bounding box of whole pixels with the triangle's corners (relative
-// to the box) and the irradiance (W/m^2) at its corners; the fragment shader writes
-// the integral of that linear irradiance over the part of its pixel the triangle
-// covers (pixel_integrals), weighted as before by the covered area.
+// per grid quad; the geometry shader turns a drawn quad into two triangles, emitted
+// together as the quad's bounding box of whole pixels with the corners (relative to
+// the box) and the irradiance (W/m^2) at each triangle's corners; the fragment
+// shader writes, per triangle, the integral of that linear irradiance over the part
+// of its pixel the triangle covers (pixel_integrals).
 //
 // Each triangle holds half the quad's flux, its grid-space share, so its mean
 // irradiance is flux / area as with constant triangles; only the shape within it is
@@ -26,7 +26,116 @@
 //                                        the triangle's area (m^2) on the receiver,
 //                                        from its target pixels a, b, c, its hits
 //                                        pa, pb, pc and the receiver normal n
-#if defined VERTEX_SHADER
+//
+// Three stages, each over the whole grid, share the neighbours' work:
+//   QUAD_PASS (compute, one invocation per quad): whether the quad is drawn
+//     (quad_flags, which the Gaussians read too), the receiver areas of its two
+//     triangles and their mean irradiance (quad_data, quad_means);
+//   CORNER_PASS (compute, one per vertex): the vertex's irradiance estimate e and
+//     the range [lo_e, hi_e] of the means of the drawn triangles around it
+//     (corner_data);
+//   the draw (geometry shader, one per quad): reads them and emits its triangles.
+//   Both triangles of a quad are drawn in one box of whole pixels, the quad's.
+// A geometry shader that gathered the 3 x 3 quads around its own took 2.5x as long.
+
+#if defined GEOMETRY_SHADER || defined COMPUTE_SHADER
+// quad q: x 1 if drawn (0 not), y and z the receiver areas (m^2) of its triangles
+// (c0, c1, c2) and (c0, c2, c3); quad_means[2q], [2q + 1]: their mean irradiance
+// (rgb, W/m^2): half the quad's flux over each area.
+layout(std430, binding = 2) buffer QuadData { vec4 quad_data[]; };
+layout(std430, binding = 3) buffer QuadMeans { vec4 quad_means[]; };
+// record i: corner_data[3i] rgb e, [3i + 1] rgb lo_e, [3i + 2] rgb hi_e (W/m^2).
+layout(std430, binding = 4) buffer CornerData { vec4 corner_data[]; };
+
+int quad_index(int view, int qx, int qy) {
+    return (view * (u_grid - 1) + qy) * (u_grid - 1) + qx;
+}
+#endif
+
+#if defined COMPUTE_SHADER
+layout(local_size_x = 64) in;
+uniform int u_count;                // quads (QUAD_PASS) or records (CORNER_PASS)
+
+#if defined QUAD_PASS
+void main() {
+    int q = int(gl_GlobalInvocationID.x);
+    if (q >= u_count) return;
+    int per_view = (u_grid - 1) * (u_grid - 1);
+    int view = q / per_view;
+    int local = q - view * per_view;
+    int qx = local % (u_grid - 1), qy = local / (u_grid - 1);
+    int record[4] = int[4](grid_record(view, qx, qy), grid_record(view, qx + 1, qy),
+                           grid_record(view, qx + 1, qy + 1), grid_record(view, qx, qy + 1));
+    vec2 c[4];
+    bool drawn = true;
+    for (int k = 0; k < 4; ++k) drawn = to_target(record[k], c[k]) && drawn;
+    float receiver = splat_records[record[0] * 5 + 3].w;
+    for (int m = 1; m < 4; ++m)
+        drawn = drawn && abs(splat_records[record[m] * 5 + 3].w - receiver) <= 0.5;
+    drawn = drawn && quad_shape_drawn(view, qx, qy, c);
+    vec2 areas = vec2(0.0);
+    if (drawn) {
+        vec3 p0 = splat_records[record[0] * 5 + 2].xyz, p1 = splat_records[record[1] * 5 + 2].xyz;
+        vec3 p2 = splat_records[record[2] * 5 + 2].xyz, p3 = splat_records[record[3] * 5 + 2].xyz;
+        // The receiver's normal (mean of the corners'): a normal taken from the hits
+        // themselves would tilt with their rounding on tiny triangles and, since only
+        // |cos| <= 1 enters, always inflate the area (lost 4e-4 of the flux).
+        vec3 n = splat_records[record[0] * 5 + 4].xyz + splat_records[record[1] * 5 + 4].xyz
+            + splat_records[record[2] * 5 + 4].xyz + splat_records[record[3] * 5 + 4].xyz;
+        n = dot(n, n) > 0.0 ? normalize(n) : vec3(0.0, 0.0, 1.0);
+        areas = max(vec2(triangle_area(c[0], c[1], c[2], p0, p1, p2, n),
+                         triangle_area(c[0], c[2], c[3], p0, p2, p3, n)), vec2(0.0));
+    }
+    // Half the quad's flux (an eighth of each corner's) over each triangle's area.
+    vec3 half_flux = vec3(0.0);
+    for (int m = 0; m < 4; ++m) half_flux += 0.125 * splat_records[record[m] * 5 + 3].rgb;
+    quad_flags[q] = drawn ? 1 : 0;
+    quad_data[q] = vec4(drawn ? 1.0 : 0.0, areas, 0.0);
+    quad_means[2 * q] = vec4(areas.x > 0.0 ? half_flux / areas.x : vec3(0.0), 0.0);
+    quad_means[2 * q + 1] = vec4(areas.y > 0.0 ? half_flux / areas.y : vec3(0.0), 0.0);
+}
+#elif defined CORNER_PASS
+// Each vertex's irradiance: the flux it gives its drawn quads (a quarter per quad)
+// over a third of the area of the triangles around it that have it as a corner (its
+// share of their area under linear interpolation); and the range of those
+// triangles' means.
+void main() {
+    int i = int(gl_GlobalInvocationID.x);
+    if (i >= u_count) return;
+    int per_view = u_grid * u_grid;
+    int view = i / per_view;
+    int local = i - view * per_view;
+    int tx = local % u_grid, ty = local / u_grid;
+    ivec2 offset[4] = ivec2[4](ivec2(0, 0), ivec2(1, 0), ivec2(1, 1), ivec2(0, 1));
+    float quads = 0.0, around = 0.0;
+    vec3 lo_e = vec3(3.0e38), hi_e = vec3(0.0);
+    for (int m = 0; m < 4; ++m) {                // the quad of which it is corner m
+        ivec2 o = ivec2(tx, ty) - offset[m];
+        if (o.x < 0 || o.y < 0 || o.x >= u_grid - 1 || o.y >= u_grid - 1) continue;
+        int q = quad_index(view, o.x, o.y);
+        vec4 data = quad_data[q];
+        if (data.x < 0.5) continue;
+        quads += 1.0;
+        if (m != 3 && data.y > 0.0) {           // in triangle (c0, c1, c2)
+            around += data.y;
+            lo_e = min(lo_e, quad_means[2 * q].rgb);
+            hi_e = max(hi_e, quad_means[2 * q].rgb);
+        }
+        if (m != 1 && data.z > 0.0) {           // in triangle (c0, c2, c3)
+            around += data.z;
+            lo_e = min(lo_e, quad_means[2 * q + 1].rgb);
+            hi_e = max(hi_e, quad_means[2 * q + 1].rgb);
+        }
+    }
+    vec3 flux = splat_records[i * 5 + 3].rgb;
+    vec3 e = around > 0.0 ? 0.25 * quads * flux / (around / 3.0) : vec3(0.0);
+    corner_data[3 * i] = vec4(e, 0.0);
+    corner_data[3 * i + 1] = vec4(lo_e, 0.0);
+    corner_data[3 * i + 2] = vec4(hi_e, 0.0);
+}
+#endif
+
+#elif defined VERTEX_SHADER
 flat out int v_quad;
 void main() {
     v_quad = gl_VertexID;
@@ -34,22 +143,22 @@ void main() {
 }
 #elif defined GEOMETRY_SHADER
 layout(points) in;
-layout(triangle_strip, max_vertices = 8) out;
+layout(triangle_strip, max_vertices = 4) out;
 flat in int v_quad[];
-flat out vec2 g_a;
-flat out vec2 g_b;
-flat out vec2 g_c;
+// The quad's corners relative to g_lo (pixels), and the irradiance (W/m^2) at the
+// corners of its triangles (c0, c1, c2) and (c0, c2, c3); a triangle not drawn has
+// zeros and g_drawn's component 0. Both are drawn in one box, the quad's: a
+// triangle's own box is nearly its quad's, so a box per triangle rasterised most
+// pixels twice.
+flat out vec2 g_c0;
+flat out vec2 g_c1;
+flat out vec2 g_c2;
+flat out vec2 g_c3;
 flat out vec2 g_lo;
-flat out vec3 g_ea;
-flat out vec3 g_eb;
-flat out vec3 g_ec;
+flat out vec3 g_first[3];
+flat out vec3 g_second[3];
+flat out vec2 g_drawn;
 
-// A triangle whose longest side^2 exceeds SLIVER times its area (pixels) is drawn at
-// constant irradiance: the float32 rounding of its barycentric integrals grows as
-// the square of that ratio (about 1e-3 relative at 128). Slivers at a focus or a
-// fold drawn linear without the limiter below changed glass_sphere's flux by 8e-5
-// at grid 96; with the limiter the bundled scenes keep their flux to 5e-7 with or
-// without this guard, and their errors do not move.
 const float SLIVER = 128.0;
 
 bool sliver(vec2 a, vec2 b, vec2 c) {
@@ -58,14 +167,16 @@ bool sliver(vec2 a, vec2 b, vec2 c) {
     return !(max(max(dot(u, u), dot(w, w)), dot(v, v)) < SLIVER * area);
 }
 
-// Draws triangle (a, b, c) of receiver area `area` holding `flux`: its irradiance is
-// linear between the corners' estimates e scaled to keep the flux, with the linear
-// part shrunk until no corner leaves [lo_e, hi_e], the range of the mean irradiance
-// of the triangles around that corner (Barth and Jespersen's limiter; the mean, and
-// so the flux, is kept). Slivers are drawn at their mean.
-void emit_triangle(vec2 a, vec2 b, vec2 c, float area, vec3 flux, vec3 e[3], vec3 lo_e[3],
-                   vec3 hi_e[3]) {
-    if (!(area > 0.0)) return;
+// The corner values of triangle (a, b, c) of receiver area `area` holding `flux`:
+// its irradiance is linear between the corners' estimates e scaled to keep the flux,
+// with the linear part shrunk until no corner leaves [lo_e, hi_e], the range of the
+// mean irradiance of the triangles around that corner (Barth and Jespersen's
+// limiter; the mean, and so the flux, is kept). Slivers are drawn at their mean.
+// False (values zero) for a triangle of no area, which is not drawn.
+bool triangle_values(vec2 a, vec2 b, vec2 c, float area, vec3 flux, vec3 e[3],
+                     vec3 lo_e[3], vec3 hi_e[3], out vec3 corner[3]) {
+    for (int k = 0; k < 3; ++k) corner[k] = vec3(0.0);
+    if (!(area > 0.0)) return false;
     vec3 mean = flux / area;                    // W/m^2
     vec3 sum = e[0] + e[1] + e[2];
     vec3 value[3];
@@ -78,136 +189,87 @@ void emit_triangle(vec2 a, vec2 b, vec2 c, float area, vec3 flux, vec3 e[3], vec
             else if (delta < 0.0) phi[i] = min(phi[i], min(lo_e[k][i] - mean[i], 0.0) / delta);
         }
     }
-    vec2 lo = floor(min(min(a, b), c));
-    vec2 hi = ceil(max(max(a, b), c));
+    for (int k = 0; k < 3; ++k) corner[k] = mean + phi * (value[k] - mean);
+    return true;
+}
+
+void main() {
+    int q = v_quad[0];
+    vec4 data = quad_data[q];
+    if (data.x < 0.5) return;
+    int per_view = (u_grid - 1) * (u_grid - 1);
+    int view = q / per_view;
+    int local = q - view * per_view;
+    int qx = local % (u_grid - 1), qy = local / (u_grid - 1);
+    int record[4] = int[4](grid_record(view, qx, qy), grid_record(view, qx + 1, qy),
+                           grid_record(view, qx + 1, qy + 1), grid_record(view, qx, qy + 1));
+    vec2 c[4];
+    vec3 e[4], lo_e[4], hi_e[4];
+    for (int k = 0; k < 4; ++k) {
+        to_target(record[k], c[k]);
+        e[k] = corner_data[3 * record[k]].rgb;
+        lo_e[k] = corner_data[3 * record[k] + 1].rgb;
+        hi_e[k] = corner_data[3 * record[k] + 2].rgb;
+    }
+    vec3 first[3], second[3];
+    bool one = triangle_values(c[0], c[1], c[2], data.y, quad_means[2 * q].rgb * data.y,
+                               vec3[3](e[0], e[1], e[2]), vec3[3](lo_e[0], lo_e[1], lo_e[2]),
+                               vec3[3](hi_e[0], hi_e[1], hi_e[2]), first);
+    bool two = triangle_values(c[0], c[2], c[3], data.z, quad_means[2 * q + 1].rgb * data.z,
+                               vec3[3](e[0], e[2], e[3]), vec3[3](lo_e[0], lo_e[2], lo_e[3]),
+                               vec3[3](hi_e[0], hi_e[2], hi_e[3]), second);
+    if (!one && !two) return;
+    vec2 lo = floor(min(min(c[0], c[1]), min(c[2], c[3])));
+    vec2 hi = ceil(max(max(c[0], c[1]), max(c[2], c[3])));
     hi = max(hi, lo + 1.0);
-    g_a = a - lo;
-    g_b = b - lo;
-    g_c = c - lo;
-    g_lo = lo;
-    g_ea = mean + phi * (value[0] - mean);
-    g_eb = mean + phi * (value[1] - mean);
-    g_ec = mean + phi * (value[2] - mean);
     vec2 corner[4] = vec2[4](lo, vec2(hi.x, lo.y), vec2(lo.x, hi.y), hi);
     for (int k = 0; k < 4; ++k) {
+        g_c0 = c[0] - lo;
+        g_c1 = c[1] - lo;
+        g_c2 = c[2] - lo;
+        g_c3 = c[3] - lo;
+        g_lo = lo;
+        g_first = first;
+        g_second = second;
+        g_drawn = vec2(one ? 1.0 : 0.0, two ? 1.0 : 0.0);
         gl_Position = target_position(corner[k]);
         EmitVertex();
     }
     EndPrimitive();
 }
-
-void main() {
-    int per_view = (u_grid - 1) * (u_grid - 1);
-    int view = v_quad[0] / per_view;
-    int local = v_quad[0] - view * per_view;
-    int qx = local % (u_grid - 1), qy = local / (u_grid - 1);
-    // The 4 x 4 vertices around the quad (block (i, j) = vertex (qx - 1 + i,
-    // qy - 1 + j)): their records, target pixels and whether they are splatted there.
-    int record[16];
-    vec2 pix[16];
-    bool on[16];
-    for (int b = 0; b < 16; ++b) {
-        int x = qx - 1 + b % 4, y = qy - 1 + b / 4;
-        record[b] = grid_record(view, clamp(x, 0, u_grid - 1), clamp(y, 0, u_grid - 1));
-        on[b] = x >= 0 && y >= 0 && x < u_grid && y < u_grid && to_target(record[b], pix[b]);
-        if (!on[b]) pix[b] = vec2(0.0);
-    }
-    // The 3 x 3 quads around it (this one at the centre, j = 4): drawn, and the
-    // receiver areas (m^2) of their triangles (c0, c1, c2) and (c0, c2, c3).
-    bool drawn[9];
-    vec2 areas[9];
-    ivec4 corners = ivec4(0, 1, 5, 4);       // block offsets of c0, c1, c2, c3
-    for (int j = 0; j < 9; ++j) {
-        int b0 = (j / 3) * 4 + j % 3;
-        ivec4 k = b0 + corners;
-        drawn[j] = false;
-        areas[j] = vec2(0.0);
-        if (!(on[k.x] && on[k.y] && on[k.z] && on[k.w])) continue;
-        float receiver = splat_records[record[k.x] * 5 + 3].w;
-        bool same = true;
-        for (int m = 1; m < 4; ++m)
-            same = same && abs(splat_records[record[k[m]] * 5 + 3].w - receiver) <= 0.5;
-        vec2 c[4] = vec2[4](pix[k.x], pix[k.y], pix[k.z], pix[k.w]);
-        if (!same || !quad_shape_drawn(view, qx - 1 + j % 3, qy - 1 + j / 3, c)) continue;
-        drawn[j] = true;
-        vec3 p0 = splat_records[record[k.x] * 5 + 2].xyz, p1 = splat_records[record[k.y] * 5 + 2].xyz;
-        vec3 p2 = splat_records[record[k.z] * 5 + 2].xyz, p3 = splat_records[record[k.w] * 5 + 2].xyz;
-        // The receiver's normal (mean of the corners'): a normal taken from the hits
-        // themselves would tilt with their rounding on tiny triangles and, since only
-        // |cos| <= 1 enters, always inflate the area (lost 4e-4 of the flux).
-        vec3 n = splat_records[record[k.x] * 5 + 4].xyz + splat_records[record[k.y] * 5 + 4].xyz
-            + splat_records[record[k.z] * 5 + 4].xyz + splat_records[record[k.w] * 5 + 4].xyz;
-        n = dot(n, n) > 0.0 ? normalize(n) : vec3(0.0, 0.0, 1.0);
-        areas[j] = max(vec2(triangle_area(c[0], c[1], c[2], p0, p1, p2, n),
-                            triangle_area(c[0], c[2], c[3], p0, p2, p3, n)), vec2(0.0));
-    }
-    quad_flags[v_quad[0]] = drawn[4] ? 1 : 0;      // for the Gaussians drawn next
-    if (!drawn[4]) return;
-    // The mean irradiance of the drawn quads' triangles: half the quad's flux (an
-    // eighth of each corner's) over each triangle's area.
-    vec3 means[18];
-    for (int j = 0; j < 9; ++j) {
-        int b0 = (j / 3) * 4 + j % 3;
-        vec3 half_flux = vec3(0.0);
-        for (int m = 0; m < 4; ++m)
-            half_flux += 0.125 * splat_records[record[b0 + corners[m]] * 5 + 3].rgb;
-        means[2 * j] = areas[j].x > 0.0 ? half_flux / areas[j].x : vec3(0.0);
-        means[2 * j + 1] = areas[j].y > 0.0 ? half_flux / areas[j].y : vec3(0.0);
-    }
-    // Each corner's irradiance: the flux it gives its drawn quads (a quarter per
-    // quad) over a third of the area of the triangles around it that have it as a
-    // corner (its share of their area under linear interpolation); and the range of
-    // those triangles' means.
-    ivec2 offset[4] = ivec2[4](ivec2(0, 0), ivec2(1, 0), ivec2(1, 1), ivec2(0, 1));
-    vec3 e[4], lo_e[4], hi_e[4];
-    for (int k = 0; k < 4; ++k) {
-        float quads = 0.0, around = 0.0;
-        lo_e[k] = vec3(3.0e38);
-        hi_e[k] = vec3(0.0);
-        for (int m = 0; m < 4; ++m) {            // the quad of which it is corner m
-            ivec2 q = offset[k] - offset[m] + 1;
-            int j = q.y * 3 + q.x;
-            if (!drawn[j]) continue;
-            quads += 1.0;
-            if (m != 3 && areas[j].x > 0.0) {    // in triangle (c0, c1, c2)
-                around += areas[j].x;
-                lo_e[k] = min(lo_e[k], means[2 * j]);
-                hi_e[k] = max(hi_e[k], means[2 * j]);
-            }
-            if (m != 1 && areas[j].y > 0.0) {    // in triangle (c0, c2, c3)
-                around += areas[j].y;
-                lo_e[k] = min(lo_e[k], means[2 * j + 1]);
-                hi_e[k] = max(hi_e[k], means[2 * j + 1]);
-            }
-        }
-        int b = (offset[k].y + 1) * 4 + offset[k].x + 1;
-        vec3 flux = splat_records[record[b] * 5 + 3].rgb;
-        e[k] = around > 0.0 ? 0.25 * quads * flux / (around / 3.0) : vec3(0.0);
-    }
-    vec2 c0 = pix[5], c1 = pix[6], c2 = pix[10], c3 = pix[9];
-    emit_triangle(c0, c1, c2, areas[4].x, means[8] * areas[4].x,
-                  vec3[3](e[0], e[1], e[2]), vec3[3](lo_e[0], lo_e[1], lo_e[2]),
-                  vec3[3](hi_e[0], hi_e[1], hi_e[2]));
-    emit_triangle(c0, c2, c3, areas[4].y, means[9] * areas[4].y,
-                  vec3[3](e[0], e[2], e[3]), vec3[3](lo_e[0], lo_e[2], lo_e[3]),
-                  vec3[3](hi_e[0], hi_e[2], hi_e[3]));
-}
 #elif defined FRAGMENT_SHADER
-flat in vec2 g_a;
-flat in vec2 g_b;
-flat in vec2 g_c;
+flat in vec2 g_c0;
+flat in vec2 g_c1;
+flat in vec2 g_c2;
+flat in vec2 g_c3;
 flat in vec2 g_lo;
-flat in vec3 g_ea;
-flat in vec3 g_eb;
-flat in vec3 g_ec;
+flat in vec3 g_first[3];
+flat in vec3 g_second[3];
+flat in vec2 g_drawn;
 out vec4 out_irradiance;
 void main() {
     vec2 rel = floor(gl_FragCoord.xy) - g_lo;
+    vec2 c0 = g_c0 - rel, c2 = g_c2 - rel;
+    vec3 value = vec3(0.0);
+    float covered = 0.0;
     vec2 lambda;
-    float covered = pixel_integrals(g_a - rel, g_b - rel, g_c - rel, lambda);
+    if (g_drawn.x > 0.5) {
+        float part = pixel_integrals(c0, g_c1 - rel, c2, lambda);
+        if (part > 0.0) {
+            value += g_first[0] * (part - lambda.x - lambda.y) + g_first[1] * lambda.x
+                + g_first[2] * lambda.y;
+            covered += part;
+        }
+    }
+    if (g_drawn.y > 0.5) {
+        float part = pixel_integrals(c0, c2, g_c3 - rel, lambda);
+        if (part > 0.0) {
+            value += g_second[0] * (part - lambda.x - lambda.y) + g_second[1] * lambda.x
+                + g_second[2] * lambda.y;
+            covered += part;
+        }
+    }
     if (covered <= 0.0) discard;
-    vec3 value = g_ea * (covered - lambda.x - lambda.y) + g_eb * lambda.x + g_ec * lambda.y;
     out_irradiance = vec4(value, covered);
 }
 #endif
-
