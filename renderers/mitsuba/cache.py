@@ -116,9 +116,13 @@ def cache_dir(override: str | Path | None = None) -> Path:
 
 
 def _jsonable(value):
+    """A dataclass tree as JSON values, without its file paths (fields declared with
+    ``path=True``): where a file lives is not physics, and what it holds enters the
+    key as the bytes of the meshes built from it (:func:`cache_key`)."""
     if dataclasses.is_dataclass(value):
         return {"_type": type(value).__name__,
-                **{f.name: _jsonable(getattr(value, f.name)) for f in dataclasses.fields(value)}}
+                **{f.name: _jsonable(getattr(value, f.name)) for f in dataclasses.fields(value)
+                   if not f.metadata.get("path")}}
     if isinstance(value, (tuple, list)):
         return [_jsonable(v) for v in value]
     return value
@@ -133,7 +137,8 @@ REFERENCE_SETTINGS = ("receiver_map", "photons", "spp", "seed", "seeds", "target
 def cache_key(scene: Scene, versions: dict[str, str], *, camera: str = "trace") -> str:
     """Hex SHA-256 naming the reference of ``scene`` under these versions.
 
-    The scene's physics only: its fields without the file path and without
+    The scene's physics only: its fields without file paths (the scene's, its
+    meshes' and height arrays') and without
     ``[scene]`` :data:`NON_PHYSICAL` (name, description), with only
     :data:`REFERENCE_SETTINGS` of its settings, and the bytes of every mesh; and
     ``camera``, the camera integrator (a key of :data:`CAMERA_INTEGRATORS`).

@@ -230,6 +230,25 @@ def test_renaming_a_scene_hits_its_cached_reference(tiny, tmp_path):
         assert cache_key(other, mitsuba_versions()) != cache_key(tiny, mitsuba_versions())
 
 
+def test_a_mesh_keys_by_its_content_not_by_where_it_lies(tmp_path):
+    """The same scene and mesh in two folders (two checkouts) share one key; a mesh
+    with one vertex moved does not (before, the mesh's absolute path entered the
+    key, and every checkout rendered its own reference of a mesh scene)."""
+    root = Path(__file__).resolve().parents[3] / "scenes"
+    keys = {}
+    for name in ("a", "b", "moved"):
+        folder = tmp_path / name
+        (folder / "meshes").mkdir(parents=True)
+        shutil.copy(root / "bowl_sun.toml", folder / "bowl_sun.toml")
+        text = (root / "meshes" / "bowl.obj").read_text()
+        if name == "moved":
+            text = text.replace("v 1.000000 0.000000 0.000000", "v 1.000000 0.000000 0.010000", 1)
+        (folder / "meshes" / "bowl.obj").write_text(text)
+        keys[name] = cache_key(load_scene(folder / "bowl_sun.toml"), mitsuba_versions())
+    assert keys["a"] == keys["b"]
+    assert keys["moved"] != keys["a"]
+
+
 # ------------------------------------------------------------ schema of an entry
 
 
