@@ -50,6 +50,18 @@ layout(std430, binding = 4) buffer CornerData { vec4 corner_data[]; };
 int quad_index(int view, int qx, int qy) {
     return (view * (u_grid - 1) + qy) * (u_grid - 1) + qx;
 }
+
+// Quad q's view, its grid position (qx, qy) and its corners' records c0 .. c3:
+// (qx, qy), (qx + 1, qy), (qx + 1, qy + 1), (qx, qy + 1).
+void quad_corners(int q, out int view, out int qx, out int qy, out int record[4]) {
+    int per_view = (u_grid - 1) * (u_grid - 1);
+    view = q / per_view;
+    int local = q - view * per_view;
+    qx = local % (u_grid - 1);
+    qy = local / (u_grid - 1);
+    record = int[4](grid_record(view, qx, qy), grid_record(view, qx + 1, qy),
+                    grid_record(view, qx + 1, qy + 1), grid_record(view, qx, qy + 1));
+}
 #endif
 
 #if defined COMPUTE_SHADER
@@ -60,12 +72,8 @@ uniform int u_count;                // quads (QUAD_PASS) or records (CORNER_PASS
 void main() {
     int q = int(gl_GlobalInvocationID.x);
     if (q >= u_count) return;
-    int per_view = (u_grid - 1) * (u_grid - 1);
-    int view = q / per_view;
-    int local = q - view * per_view;
-    int qx = local % (u_grid - 1), qy = local / (u_grid - 1);
-    int record[4] = int[4](grid_record(view, qx, qy), grid_record(view, qx + 1, qy),
-                           grid_record(view, qx + 1, qy + 1), grid_record(view, qx, qy + 1));
+    int view, qx, qy, record[4];
+    quad_corners(q, view, qx, qy, record);
     vec2 c[4];
     bool drawn = true;
     for (int k = 0; k < 4; ++k) drawn = to_target(record[k], c[k]) && drawn;
@@ -197,12 +205,8 @@ void main() {
     int q = v_quad[0];
     vec4 data = quad_data[q];
     if (data.x < 0.5) return;
-    int per_view = (u_grid - 1) * (u_grid - 1);
-    int view = q / per_view;
-    int local = q - view * per_view;
-    int qx = local % (u_grid - 1), qy = local / (u_grid - 1);
-    int record[4] = int[4](grid_record(view, qx, qy), grid_record(view, qx + 1, qy),
-                           grid_record(view, qx + 1, qy + 1), grid_record(view, qx, qy + 1));
+    int view, qx, qy, record[4];
+    quad_corners(q, view, qx, qy, record);
     vec2 c[4];
     vec3 e[4], lo_e[4], hi_e[4];
     for (int k = 0; k < 4; ++k) {
