@@ -26,7 +26,7 @@ from PIL import Image
 from harness.studies.temporal import compare_sequences
 from reports.records import RecordSection, SceneComparison
 from reports.temporal_records import TemporalComparison
-from tests.reports.test_browser import CHROMIUM, CHROMIUM_ARGS, PageLog
+from tests.reports.test_browser import CHROMIUM, CHROMIUM_ARGS, open_ready_page
 
 __all__ = [
     "FPS",
@@ -111,20 +111,8 @@ def launch_browser(profile: Path):
 
 
 def open_page(browser, path: Path, *, init_script: str | None = None):
-    """A page at ``path`` with its :class:`PageLog`, the temporal player set up."""
-    page = browser.new_page()
-    if init_script:
-        page.add_init_script(init_script)
-    log = PageLog(page)
-    page.goto(path.as_uri(), wait_until="load")
-    # Polled from here: page.wait_for_function evaluates its predicate with eval()
-    # inside the page, which a self-contained page's CSP (no 'unsafe-eval') refuses.
-    deadline = time.monotonic() + 30
-    while page.evaluate("document.body.dataset.temporalReady") is None:
-        assert time.monotonic() < deadline, "the temporal player never got ready"
-        page.wait_for_timeout(50)
-    assert page.evaluate("document.body.dataset.temporalReady") == "true"
-    return page, log
+    """A page at ``path`` with its ``PageLog``, the temporal player set up."""
+    return open_ready_page(browser, path, ready="temporalReady", init_script=init_script)
 
 
 def _canvas(page) -> np.ndarray:

@@ -107,18 +107,23 @@ class PageLog:
         assert not self.external, self.external
 
 
-def open_ready_page(browser, path: Path):
-    """(page, its PageLog) of ``path`` opened in ``browser``, once the page says its
-    images are ready (polled from here: ``wait_for_function`` evaluates with eval(),
-    which the page's CSP refuses)."""
+def open_ready_page(browser, path: Path, *, ready: str = "hdrReady",
+                    init_script: str | None = None):
+    """(page, its PageLog) of ``path`` opened in ``browser`` (after ``init_script``,
+    if any), once the page's ``document.body.dataset[ready]`` says it is ready:
+    ``hdrReady`` for its images, ``temporalReady`` for the temporal player. Polled
+    from here: ``wait_for_function`` evaluates with eval(), which the page's CSP
+    refuses."""
     page = browser.new_page()
+    if init_script:
+        page.add_init_script(init_script)
     log = PageLog(page)
     page.goto(path.as_uri(), wait_until="load")
     deadline = time.monotonic() + 30
-    while page.evaluate("document.body.dataset.hdrReady") is None:
-        assert time.monotonic() < deadline, "the page's images never got ready"
+    while page.evaluate(f"document.body.dataset.{ready}") is None:
+        assert time.monotonic() < deadline, f"the page never set {ready}"
         page.wait_for_timeout(50)
-    assert page.evaluate("document.body.dataset.hdrReady") == "true"
+    assert page.evaluate(f"document.body.dataset.{ready}") == "true"
     return page, log
 
 
