@@ -453,7 +453,8 @@ class Settings:
     )
     back_resolution: int | None = spec(
         None, doc="Back-surface (exit) texture resolution per object view "
-        "(preset: paper = grid, strong = 4 x grid).", unit="px", ge=2, le=8192,
+        "(preset: paper = grid, strong = 4 x grid, 2 x grid where every closed dielectric "
+        "is convex).", unit="px", ge=2, le=8192,
     )
     frustum: Literal["square", "tight"] | None = spec(
         None, doc="Object view of the vertex grid: a square frustum around the objects' "

@@ -17,7 +17,7 @@ from typing import Any
 
 from harness.studies.timing import OneOffCosts
 from renderers.caustics_mapping.context import create_context
-from renderers.caustics_mapping.presets import resolve_settings
+from renderers.caustics_mapping.presets import resolve_scene
 from renderers.caustics_mapping.renderer import render_frame
 from scenes import Scene, with_settings
 from scenes.geometry import build_geometry
@@ -70,7 +70,7 @@ class RealtimeRunner:
         """The scene's settings with the preset's choices filled in (what renders;
         ``scene.settings`` keeps them unset, so an override of ``grid`` still moves
         the grid-relative ones)."""
-        return resolve_settings(self.scene.settings)
+        return resolve_scene(self.scene, self.geometry).settings
 
     def __enter__(self) -> RealtimeRunner:
         return self

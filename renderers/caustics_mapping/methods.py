@@ -9,7 +9,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from renderers.caustics_mapping.presets import resolve_settings
+from renderers.caustics_mapping.presets import resolve_scene
 from renderers.caustics_mapping.renderer import render
 from renderers.results import RenderResult
 from scenes import Scene
@@ -28,7 +28,7 @@ class PresetMethod:
 
     def configure(self, scene: Scene) -> Scene:
         settings = dataclasses.replace(scene.settings, preset=self.name)
-        return dataclasses.replace(scene, settings=resolve_settings(settings))
+        return resolve_scene(dataclasses.replace(scene, settings=settings))
 
     def render(self, scene: Scene) -> RenderResult:
         return render(self.configure(scene))

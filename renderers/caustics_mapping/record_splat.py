@@ -49,7 +49,7 @@ from renderers.caustics_mapping.light_sample import (
     splat_maps,
 )
 from renderers.caustics_mapping.lights import LightSetup, light_setups
-from renderers.caustics_mapping.presets import resolve_settings
+from renderers.caustics_mapping.presets import resolve_scene
 from renderers.caustics_mapping.receiver_positions import render_receiver_positions
 from renderers.results import ReceiverMap
 from scenes import Scene, effects_of
@@ -187,7 +187,7 @@ def splat_records(scene: Scene, records: Sequence[Sequence[np.ndarray]], *,
 
 def _splat(scene: Scene, records, ctx: moderngl.Context,
            geometry: SceneGeometry) -> SplattedMaps:
-    scene = dataclasses.replace(scene, settings=resolve_settings(scene.settings))
+    scene = resolve_scene(scene, geometry)
     s = scene.settings
     effects = effects_of(scene)
     setup = scene_setup(scene, ctx, geometry, effects=effects)

@@ -7,7 +7,6 @@ and the caustic map, for the CLI's outputs, the NumPy mirror and convergence stu
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
 import moderngl
@@ -28,7 +27,7 @@ from renderers.caustics_mapping.light_sample import (
 )
 from renderers.caustics_mapping.lights import CUBE_FACES, LightSetup, light_setups
 from renderers.caustics_mapping.metadata import MethodMetadata
-from renderers.caustics_mapping.presets import resolve_settings
+from renderers.caustics_mapping.presets import resolve_scene
 from renderers.results import ReceiverMap, RenderResult
 from scenes import Scene, effects_of
 from scenes.geometry import SceneGeometry, build_geometry
@@ -118,7 +117,7 @@ def _frame(scene: Scene, ctx: moderngl.Context | None, geometry: SceneGeometry |
 
 def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
             want_lookups: bool, want_atlas: bool) -> Frame:
-    scene = dataclasses.replace(scene, settings=resolve_settings(scene.settings))
+    scene = resolve_scene(scene, geometry)
     s = scene.settings
     effects = effects_of(scene)
     timer = PassTimer(ctx)

@@ -17,7 +17,7 @@ import pytest
 from harness.checks.stability import off_receiver_flux
 from renderers.caustics_mapping import render_frame
 from renderers.caustics_mapping.caustic_trace import STATUS
-from renderers.caustics_mapping.presets import PRESETS, resolve_settings
+from renderers.caustics_mapping.presets import PRESETS, resolve_scene, resolve_settings
 from scenes import load_scene, parse_scene, with_settings
 from scenes.geometry import build_geometry
 from tests.conftest import SCENES
@@ -46,6 +46,31 @@ def test_explicit_settings_win_over_the_preset(minimal_scene_text):
     paper = resolve_settings(settings)
     assert (paper.estimator, paper.iterations, paper.splat) == ("modified", 3, "points")
     assert paper.splat_sigma == 0.5 * settings.caustic_map / settings.grid
+
+
+@pytest.mark.parametrize(("name", "factor"), [("glass_sphere", 2), ("dispersion_sphere", 2),
+                                            ("bunny", 4), ("spot_torus", 4)])
+def test_strong_exit_surface_is_finer_where_a_body_is_not_convex(name, factor):
+    """Regression lock of the exit-surface rule (presets.py): 2x the grid where every
+    closed dielectric bounds a convex body (the spheres), 4x elsewhere (the bunny's
+    folds, the torus's hole), and a back_resolution the scene gives still wins. The
+    renderer resolves the same way, so its metadata records what was rendered."""
+    scene = with_settings(load_scene(SCENES / f"{name}.toml"), {"preset": "strong"})
+    resolved = resolve_scene(scene)
+    assert resolved.settings.back_resolution == factor * scene.settings.grid
+    assert resolve_scene(scene, build_geometry(scene)).settings == resolved.settings
+    given = with_settings(scene, {"back_resolution": 3 * scene.settings.grid})
+    assert resolve_scene(given).settings.back_resolution == 3 * scene.settings.grid
+    paper = with_settings(scene, {"preset": "paper"})
+    assert resolve_scene(paper).settings.back_resolution == scene.settings.grid
+
+
+def test_strong_sphere_exit_surface_at_twice_the_grid_in_the_render(ctx):
+    """Regression lock: the frame's metadata records the exit surface it rendered,
+    2x the grid on a sphere under the strong preset."""
+    scene = _scene("glass_sphere", preset="strong", grid=64)
+    frame = render_frame(scene, ctx=ctx, lookups=False)
+    assert frame.result.metadata["back_resolution"] == 128
 
 
 @pytest.mark.parametrize("name", ["glass_sphere", "bunny"])
