@@ -47,7 +47,7 @@ float triangle_area(vec2 a, vec2 b, vec2 c, vec3 pa, vec3 pb, vec3 pc, vec3 n) {
 #endif
 #include "splat_triangles.glsl"
 #else  // Gaussians
-#if defined VERTEX_SHADER
+#if defined COMPUTE_SHADER
 // points: u_sigma texels in every direction; footprint: the grid's hit differences.
 mat2 gaussian_covariance(int view, int tx, int ty, vec3 hit, vec3 normal, inout vec2 c) {
     return u_splat_mode == SPLAT_POINTS ? mat2(u_sigma * u_sigma)

@@ -55,13 +55,6 @@ class SplatOptions:
     grid: int
 
 
-def _record_vertex_array(program: moderngl.Program, trace: Trace) -> moderngl.VertexArray:
-    """The record buffer as point vertices: ``in_hit, in_flux, in_normal``."""
-    return program.ctx.vertex_array(
-        program, [(trace.records, "32x 4f 4f 4f", "in_hit", "in_flux", "in_normal")]
-    )
-
-
 def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: SplatOptions,
                 *, max_radius: float, uniforms: Callable[[moderngl.Program], None],
                 passes: int = 1,
@@ -73,7 +66,9 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
     map's faces).
     """
     gaussians = load_program(ctx, name)
-    programs = [gaussians]
+    # Each record's Gaussian is set up by a compute pass, then drawn (splat_gaussians.glsl).
+    setup = load_program(ctx, name, compute=True)
+    programs = [gaussians, setup]
     stages = ()
     if options.mode == "triangles":
         # The quads' and the corners' data first (compute), then the triangles.
@@ -106,12 +101,14 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
             # quad_flags, quad_data, quad_means, corner_data (splat_triangles.glsl)
             buffers = tuple(resources.buffer(n) for n in
                             (4 * quads, 16 * quads, 32 * quads, 48 * trace.count))
-        arrays.append((trace, _record_vertex_array(gaussians, trace), quads, triangles,
-                       buffers))
+        # Three vec4 per record (splat_gaussians.glsl, binding 5).
+        splats = resources.buffer(48 * trace.count)
+        arrays.append((trace, ctx.vertex_array(gaussians, []), quads, triangles, buffers,
+                       splats))
     for k in range(passes):
         if before_pass is not None:
             before_pass(k, programs)
-        for trace, points, quads, triangles, buffers in arrays:
+        for trace, points, quads, triangles, buffers, splats in arrays:
             trace.records.bind_to_storage_buffer(0)
             if triangles is not None:
                 # The triangles first: they record which quads they draw, and a
@@ -123,13 +120,17 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
                     stage.run(group_x=-(-count // 64))
                     ctx.memory_barrier()
                 triangles.render(moderngl.POINTS, vertices=quads)
+            splats.bind_to_storage_buffer(5)
+            set_uniform(setup, "u_count", trace.count)
+            setup.run(group_x=-(-trace.count // 64))
+            ctx.memory_barrier()
             points.render(moderngl.POINTS, vertices=trace.count)
     ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
-    for _, points, _, triangles, buffers in arrays:
+    for _, points, _, triangles, buffers, splats in arrays:
         points.release()
         if triangles is not None:
             triangles.release()
-        for buffer in buffers:
+        for buffer in (*buffers, splats):
             resources.give_back(buffer)
 
 

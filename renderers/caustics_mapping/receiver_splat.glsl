@@ -82,7 +82,7 @@ float triangle_area(vec2 a, vec2 b, vec2 c, vec3 pa, vec3 pb, vec3 pc, vec3 n) {
 #endif
 #include "splat_triangles.glsl"
 #else  // Gaussians
-#if defined VERTEX_SHADER
+#if defined COMPUTE_SHADER
 // points: the width the splat has in the caustic map, u_sigma caustic-map texels at
 // the hit, in metres on the receiver, in (u, v), in map pixels (at least half a
 // pixel per axis); footprint: the grid's hit differences, that width where none is
