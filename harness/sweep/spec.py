@@ -30,8 +30,9 @@ the scene's ``[settings]`` declarations, so a grid value is legal exactly when t
 same value in a scene file would be.
 
 Settings that choose the method (``preset``) or size the reference (``photons``,
-``seeds``, ``seed``, ``spp``, ``target_noise``) are refused in ``[sweep.settings]``
-and ``[sweep.grid]``: the first belong in ``presets``, the others in
+``seeds``, ``seed``, ``spp``, ``target_noise``, ``reference_time_cap``) are refused
+in ``[sweep.settings]`` and ``[sweep.grid]``: the first belong in ``presets``, the
+others in
 ``[sweep.reference]``, where every row of a scene shares one reference.
 """
 
@@ -65,7 +66,7 @@ __all__ = ["REFERENCE_KEYS", "SWEEPS_DIR", "ReferenceTable", "Setting", "Sweep",
            "resolve_sweep"]
 
 #: Settings that size the reference; set them in ``[sweep.reference]``.
-REFERENCE_KEYS = ("photons", "seeds", "seed", "spp", "target_noise")
+REFERENCE_KEYS = ("photons", "seeds", "seed", "spp", "target_noise", "reference_time_cap")
 #: Settings a sweep may not override: the method's preset (use ``presets``).
 METHOD_KEYS = ("preset",)
 #: Methods compared when the file names none: both caustics-mapping presets.
@@ -97,6 +98,9 @@ class ReferenceTable:
     target_noise: float | None = spec(
         None, doc="Stop at this relative noise (checked after each round of 2^20 photons "
         "per seed, as in a single-process reference).", gt=0)
+    reference_time_cap: float | None = spec(
+        None, doc="Time cap of the launches past the starting budget (all seeds, wall "
+        "clock), as in a single-process reference.", unit="s", gt=0)
 
     def overrides(self) -> dict[str, Any]:
         """The settings this table sets (unset ones left out)."""

@@ -162,6 +162,24 @@ def test_bundled_example_expands_to_the_grid_and_shares_references():
         assert (s.iterations, s.grid) == tuple(v for _, v in job.setting.items)
 
 
+def test_reference_time_cap_sizes_the_reference():
+    """Regression lock: ``reference_time_cap`` sizes the shared reference, so it is
+    set in ``[sweep.reference]`` and reaches the planned references and rows; in
+    ``[sweep.settings]`` it is refused by name (before, it was accepted there and the
+    shared reference went on with the scene's own cap)."""
+    head = '[sweep]\nname = "x"\nscenes = ["glass_sphere"]\npresets = ["paper"]\n'
+    sweep = parse_sweep(head + "[sweep.reference]\nreference_time_cap = 7.5\n",
+                        file="s.toml")
+    plan = plan_sweep(sweep, versions=VERSIONS)
+    assert {j.scene.settings.reference_time_cap for j in plan.references.values()} == {7.5}
+    assert {r.scene.settings.reference_time_cap for r in plan.rows} == {7.5}
+    with pytest.raises(SweepFileError) as caught:
+        parse_sweep(head + "[sweep.settings]\nreference_time_cap = 7.5\n", file="s.toml")
+    assert [(p.path, p.message) for p in caught.value.problems] == [
+        ("sweep.settings.reference_time_cap",
+         "sizes the reference: set it in [sweep.reference], not in [sweep.settings]")]
+
+
 def test_row_keys_follow_what_the_row_depends_on(tmp_path):
     """Regression lock: a row's key changes with the method's settings, the reference
     (its photons), the timing repeats and the versions; it does not change with the
