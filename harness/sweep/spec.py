@@ -32,8 +32,7 @@ same value in a scene file would be.
 Settings that choose the method (``preset``) or size the reference (``photons``,
 ``seeds``, ``seed``, ``spp``, ``target_noise``, ``reference_time_cap``) are refused
 in ``[sweep.settings]`` and ``[sweep.grid]``: the first belong in ``presets``, the
-others in
-``[sweep.reference]``, where every row of a scene shares one reference.
+others in ``[sweep.reference]``, where every row of a scene shares one reference.
 """
 
 from __future__ import annotations
