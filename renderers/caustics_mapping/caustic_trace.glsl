@@ -63,6 +63,8 @@ uniform vec3 u_absorption[8];   // K_a (1/m)
 uniform vec3 u_reflectance[8];
 uniform int u_fresnel[8];
 uniform float u_extent[8];      // bounding-box diagonal (m): re-entry test length
+uniform vec3 u_bound_lo[8];     // the object's axis-aligned bounding box (m)
+uniform vec3 u_bound_hi[8];
 uniform int u_convex[8];        // 1: a convex body, which no ray leaving it meets again
 uniform int u_channel;          // -1: all channels; c: this pass carries channel c only
 
@@ -254,11 +256,32 @@ bool surface_depth(sampler2D positions, int size, vec3 x, int object, out float 
 // object; 3.5 % of what it drops has an exact path to the floor. Entries behind the
 // first slab (a second layer under an overhang, which neither image shows) are not
 // seen.
+// Samples past the object's bounding box, grown by one front-atlas texel width at
+// its farthest point from the light, are not taken: they cannot pass. A sample x
+// passes only with its light distance between the front and the exit surfaces'
+// depths read through x's texels, whose light rays run within half a texel width
+// of x; the points of those surfaces lie in the box, and so, at x's depth, does a
+// point of the segment between them, within half a texel width of x (x farther from
+// the light than the box fails the exit surface's depth). So the test's outcome is
+// the same, at about a sixth of the samples on the bunny's exit rays (bunny strong:
+// trace 15.6 -> 9.3 ms on llvmpipe; records unchanged).
+int reentry_samples(vec3 e, vec3 r, int object, float len, float view) {
+    vec3 lo = u_bound_lo[object], hi = u_bound_hi[object];
+    float far = u_obj_persp == 1 ? length(0.5 * (lo + hi) - u_light_pos) + 0.5 * length(hi - lo)
+                                 : 1.0;
+    vec3 grown = vec3(view / float(u_grid) * far);
+    vec3 t1 = (lo - grown - e) / r, t2 = (hi + grown - e) / r;   // +-inf where r's axis is 0
+    vec3 leave = max(t1, t2);
+    float t = min(min(leave.x, leave.y), leave.z);             // where the ray leaves the box
+    return int(clamp(floor(t / len * float(REENTRY_STEPS)), 0.0, float(REENTRY_STEPS)));
+}
+
 bool reenters(vec3 e, vec3 r, int object) {
     float len = u_extent[object];
     if (!(len > 0.0)) return false;
     float view = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z);
-    for (int k = 1; k <= REENTRY_STEPS; ++k) {
+    int samples = reentry_samples(e, r, object, len, view);
+    for (int k = 1; k <= samples; ++k) {
         vec3 x = e + (len * float(k) / float(REENTRY_STEPS)) * r;
         float margin = view / float(u_grid) * (u_obj_persp == 1 ? length(x - u_light_pos) : 1.0);
         if (length(x - e) < 2.0 * margin) continue;

@@ -107,7 +107,9 @@ class MaterialTable:
     exit ray is tested for re-entering its object (empty: no test). ``convex``: 1 for
     an object that bounds a convex body (:func:`.meshes.convex`), which no ray leaving
     it meets again, so verified hits skip the re-entry and blocked-reflection tests
-    there (exact; empty: none is).
+    there (exact; empty: none is). ``bounds``: each object's axis-aligned bounding
+    box (min and max corners, m), past which the re-entry test takes no samples
+    (exact; empty: unknown, every sample taken).
     """
 
     code: tuple[int, ...]
@@ -117,14 +119,16 @@ class MaterialTable:
     fresnel: tuple[int, ...]
     extent: tuple[float, ...] = ()
     convex: tuple[int, ...] = ()
+    bounds: tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...] = ()
 
 
 def material_table(materials, closed: list[bool], effects: tuple[str, ...], *,
                    extent: tuple[float, ...] = (),
-                   convex: tuple[bool, ...] = ()) -> MaterialTable:
+                   convex: tuple[bool, ...] = (),
+                   bounds: tuple = ()) -> MaterialTable:
     """Build the table from the objects' materials; Fresnel only with the effect;
     ``extent`` the objects' bounding-box diagonals (m), ``convex`` whether each bounds
-    a convex body, if known."""
+    a convex body, ``bounds`` their bounding boxes ((min xyz, max xyz), m), if known."""
     if len(materials) > MAX_OBJECTS:
         raise ValueError(f"at most {MAX_OBJECTS} caustic objects are supported")
     code, ior, absorption, reflectance, fresnel = [], [], [], [], []
@@ -149,7 +153,9 @@ def material_table(materials, closed: list[bool], effects: tuple[str, ...], *,
             fresnel.append(0)
     return MaterialTable(tuple(code), tuple(ior), tuple(absorption), tuple(reflectance),
                          tuple(fresnel), tuple(float(e) for e in extent),
-                         tuple(int(c) for c in convex))
+                         tuple(int(c) for c in convex),
+                         tuple((tuple(map(float, lo)), tuple(map(float, hi)))
+                               for lo, hi in bounds))
 
 
 @dataclass(eq=False)
@@ -240,6 +246,12 @@ def run_caustic_trace(
     set_uniform(program, "u_extent", np.array(extent + (0.0,) * pad, np.float32))
     convex = materials.convex or (0,) * len(materials.code)
     set_uniform(program, "u_convex", np.array(convex + (0,) * pad, np.int32))
+    # Unknown bounds: a box no exit ray leaves within its object's extent.
+    unbounded = ((-1e30,) * 3, (1e30,) * 3)
+    bounds = materials.bounds or (unbounded,) * len(materials.code)
+    for k, name in enumerate(("u_bound_lo", "u_bound_hi")):
+        set_uniform(program, name, np.array([b[k] for b in bounds] + [unbounded[k]] * pad,
+                                            np.float32))
     for name, value in (
         ("u_positions_size", positions.size), ("u_grid", grid),
         ("u_back_size", back_size or grid), ("u_channel", channel),

@@ -127,6 +127,8 @@ def scene_setup(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry, *,
                               for g in geometry.objects),
         # Only verified hits test re-entry, so only they need to know convexity.
         convex=tuple(bool(scene.settings.verify_hits) and convex(g.mesh)
+                     for g in geometry.objects),
+        bounds=tuple((g.mesh.positions.min(axis=0), g.mesh.positions.max(axis=0))
                      for g in geometry.objects))
     return SceneSetup(
         receivers=[upload_mesh(ctx, g.mesh) for g in geometry.receivers],

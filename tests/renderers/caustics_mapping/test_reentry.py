@@ -89,3 +89,24 @@ def test_a_convex_object_skips_the_test_and_loses_nothing(monkeypatch):
     np.testing.assert_array_equal(skipped.hits["hit"], tested.hits["hit"])
     np.testing.assert_array_equal(skipped.result.receivers[0].irradiance,
                                   tested.result.receivers[0].irradiance)
+
+
+def test_samples_past_the_bounding_box_are_skipped_exactly(monkeypatch):
+    """The re-entry test takes no samples past the object's bounding box grown by a
+    texel (``reentry_samples``, a sixth of the samples on the bunny's exit rays): the
+    bunny's records are the same as with every sample taken, re-entered vertices
+    included."""
+    from renderers.caustics_mapping import light_sample  # noqa: PLC0415 - patched below
+
+    scene = small_scene(ROOT / "scenes" / "bunny.toml", preset="strong")
+    clipped = render_frame(scene, lookups=False).hits
+    table = light_sample.material_table
+
+    def unbounded(*args, bounds=(), **kwargs):     # the table without the boxes
+        return table(*args, **kwargs)
+
+    monkeypatch.setattr(light_sample, "material_table", unbounded)
+    every = render_frame(scene, lookups=False).hits
+    assert (every["status"] == STATUS["reentered"]).sum() > 20
+    np.testing.assert_array_equal(clipped["status"], every["status"])
+    np.testing.assert_array_equal(clipped["hit"], every["hit"])
