@@ -50,19 +50,19 @@ _BACK_FACTOR = {"paper": 1, "strong": 4}
 _CONVEX_BACK_FACTOR = 2
 
 
-def resolve_settings(settings: Settings, *, convex: bool = False) -> Settings:
+def resolve_settings(settings: Settings, *, convex_bodies: bool = False) -> Settings:
     """``settings`` with every unset (``None``) choice filled from its preset.
 
     ``splat_sigma`` stays ``None`` outside the paper preset: the renderer then derives
     it from the hits (one mean spacing of neighbouring hits, in caustic-map texels).
-    ``convex``: every closed dielectric of the scene bounds a convex body (strong's
+    ``convex_bodies``: every closed dielectric of the scene bounds a convex body (strong's
     exit surface is then at 2x the grid, else at 4x); :func:`resolve_scene` finds it.
     """
     preset = settings.preset
     values = {k: v for k, v in PRESETS[preset].items() if getattr(settings, k) is None}
     if settings.back_resolution is None:
         factor = _BACK_FACTOR[preset]
-        if convex and preset == "strong":
+        if convex_bodies and preset == "strong":
             factor = _CONVEX_BACK_FACTOR
         values["back_resolution"] = min(settings.grid * factor, 8192)
     if settings.splat_sigma is None and preset == "paper":
@@ -82,7 +82,7 @@ def resolve_scene(scene: Scene, geometry: SceneGeometry | None = None) -> Scene:
     """``scene`` with its settings resolved (:func:`resolve_settings`), the exit
     surface's convexity read from ``geometry`` (built from ``scene`` if not given)."""
     settings = scene.settings
-    convex_scene = False
+    bodies = False
     if settings.back_resolution is None and settings.preset == "strong":
-        convex_scene = convex_exits(geometry or build_geometry(scene))
-    return dataclasses.replace(scene, settings=resolve_settings(settings, convex=convex_scene))
+        bodies = convex_exits(geometry or build_geometry(scene))
+    return dataclasses.replace(scene, settings=resolve_settings(settings, convex_bodies=bodies))

@@ -45,10 +45,8 @@ bool gaussian_setup(int i, out vec2 c, out mat2 inv, out vec3 value, out float s
     value = vec3(0.0);
     size = 0.0;
     if (!to_target(i, c)) return false;
-    int per_view = u_grid * u_grid;                       // record -> (view, tx, ty)
-    int view = i / per_view;
-    int local = i - view * per_view;
-    int tx = local % u_grid, ty = local / u_grid;
+    int view, tx, ty;
+    record_vertex(i, view, tx, ty);
     float share = gaussian_share(view, tx, ty);
     if (share <= 0.0) return false;
     vec3 hit = splat_records[i * 5 + 2].xyz;

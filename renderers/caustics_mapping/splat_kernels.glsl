@@ -71,6 +71,14 @@ int grid_record(int view, int tx, int ty) {
     return (view * u_grid + ty) * u_grid + tx;
 }
 
+// The grid vertex (view, tx, ty) of record i: grid_record's inverse.
+void record_vertex(int i, out int view, out int tx, out int ty) {
+    view = i / (u_grid * u_grid);
+    int local = i - view * u_grid * u_grid;
+    tx = local % u_grid;
+    ty = local / u_grid;
+}
+
 // The hit of neighbour (tx + dx, ty + dy) in target pixels, if it is splatted there
 // and on the same receiver as `receiver`.
 bool neighbour(int view, int tx, int ty, int dx, int dy, float receiver, out vec2 pix) {

@@ -110,10 +110,8 @@ void main() {
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_count) return;
-    int per_view = u_grid * u_grid;
-    int view = i / per_view;
-    int local = i - view * per_view;
-    int tx = local % u_grid, ty = local / u_grid;
+    int view, tx, ty;
+    record_vertex(i, view, tx, ty);
     ivec2 offset[4] = ivec2[4](ivec2(0, 0), ivec2(1, 0), ivec2(1, 1), ivec2(0, 1));
     float quads = 0.0, around = 0.0;
     vec3 lo_e = vec3(3.0e38), hi_e = vec3(0.0);
