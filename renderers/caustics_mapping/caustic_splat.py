@@ -25,6 +25,10 @@ __all__ = ["SPLAT_MODES", "SplatOptions", "draw_splats", "splat_caustic_map"]
 SPLAT_MODES = {"points": 0, "footprint": 1, "triangles": 2}
 #: Widest triangle drawn (pixels); wider quads fall back to Gaussians.
 MAX_TRIANGLE_PX = 64.0
+#: Long Gaussians and quads are drawn in boxes along their own axes, not in
+#: axis-aligned ones (``splat_kernels.glsl``): the same pixels get a share, fewer are
+#: visited. False draws every kernel axis-aligned (tests compare the two).
+TIGHT_BOXES = True
 
 
 @dataclass(frozen=True)
@@ -66,9 +70,12 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
     map's faces).
     """
     gaussians = load_program(ctx, name)
-    # Each record's Gaussian is set up by a compute pass, then drawn (splat_gaussians.glsl).
+    # Each record's Gaussian is set up by a compute pass, then drawn as a sprite or,
+    # listed by a second pass, as a rectangle (splat_gaussians.glsl).
     setup = load_program(ctx, name, compute=True)
-    programs = [gaussians, setup]
+    compact = load_program(ctx, name, defines={"COMPACT": 1}, compute=True)
+    boxed = load_program(ctx, name, defines={"BOXED": 1})
+    programs = [gaussians, setup, compact, boxed]
     stages = ()
     if options.mode == "triangles":
         # The quads' and the corners' data first (compute), then the triangles.
@@ -86,6 +93,7 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
         set_uniform(program, "u_sigma", float(options.sigma))
         set_uniform(program, "u_cut", float(options.cut))
         set_uniform(program, "u_max_radius", float(max_radius))
+        set_uniform(program, "u_tight_boxes", int(TIGHT_BOXES))
     ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
     ctx.enable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
     ctx.blend_func = moderngl.ONE, moderngl.ONE
@@ -101,10 +109,12 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
             # quad_flags, quad_data, quad_means, corner_data (splat_triangles.glsl)
             buffers = tuple(resources.buffer(n) for n in
                             (4 * quads, 16 * quads, 32 * quads, 48 * trace.count))
-        # Three vec4 per record (splat_gaussians.glsl, binding 5).
-        splats = resources.buffer(48 * trace.count)
-        arrays.append((trace, ctx.vertex_array(gaussians, []), quads, triangles, buffers,
-                       splats))
+        # Three vec4 per record, the boxed records' list and their draw command
+        # (splat_gaussians.glsl, bindings 5 to 7).
+        splats = (resources.buffer(48 * trace.count), resources.buffer(4 * trace.count),
+                  resources.buffer(16))
+        arrays.append((trace, (ctx.vertex_array(gaussians, []), ctx.vertex_array(boxed, [])),
+                       quads, triangles, buffers, splats))
     for k in range(passes):
         if before_pass is not None:
             before_pass(k, programs)
@@ -120,17 +130,20 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
                     stage.run(group_x=-(-count // 64))
                     ctx.memory_barrier()
                 triangles.render(moderngl.POINTS, vertices=quads)
-            splats.bind_to_storage_buffer(5)
-            set_uniform(setup, "u_count", trace.count)
-            setup.run(group_x=-(-trace.count // 64))
-            ctx.memory_barrier()
-            points.render(moderngl.POINTS, vertices=trace.count)
+            for binding, buffer in enumerate(splats, start=5):
+                buffer.bind_to_storage_buffer(binding)
+            for program, groups in ((setup, -(-trace.count // 64)), (compact, 1)):
+                set_uniform(program, "u_count", trace.count)
+                program.run(group_x=groups)
+                ctx.memory_barrier()
+            points[0].render(moderngl.POINTS, vertices=trace.count)
+            points[1].render_indirect(splats[2], moderngl.TRIANGLE_STRIP, count=1)
     ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
     for _, points, _, triangles, buffers, splats in arrays:
-        points.release()
-        if triangles is not None:
-            triangles.release()
-        for buffer in (*buffers, splats):
+        for array in (*points, triangles):
+            if array is not None:
+                array.release()
+        for buffer in (*buffers, *splats):
             resources.give_back(buffer)
 
 

@@ -3,7 +3,8 @@
 // caustic_splat.glsl and receiver_splat.glsl when TRIANGLES is not defined: a
 // compute pass sets up one Gaussian per trace record, then one vertex per record
 // draws it as a square point sprite over every target pixel the Gaussian's cut-off
-// ellipse reaches. With c the hit in target pixels, S the
+// ellipse reaches, or, where the ellipse is long or leaning, as a rectangle along
+// its axes (cutoff_box). With c the hit in target pixels, S the
 // covariance (target pixels^2) and q = x - c for a pixel centre x, the pixel gets
 //     w = exp(-q^T S^-1 q / 2)   where q^T S^-1 q <= u_cut^2 (else nothing),
 //     rgb = value * w,  a = w,   value = share * flux / (norm * A):
@@ -28,14 +29,42 @@
 // (the norm's pixels, the neighbours' hits) run on every thread the driver has,
 // where llvmpipe shades a draw's vertices on one (glass_sphere, strong: caustic map
 // 32 -> 29 ms on 2 cores; renders unchanged, bit for bit):
-//   0: xy c (target pixels), z sprite size (pixels), w 1 if drawn (else 0)
+//   0: xy c (target pixels), z sprite size (pixels), w how it is drawn: 0 not,
+//      1 as a sprite, 2 as a rectangle (BOXED)
 //   1: S^-1 (target pixels^-2), columns xy and zw
 //   2: rgb value (W/m^2 at weight 1), w 0
 layout(std430, binding = 5) buffer GaussianSplats { vec4 gaussians[]; };
+// The records drawn as rectangles, in record order (written by the COMPACT pass),
+// and the indirect draw of them: 4 vertices (a strip) times their count.
+layout(std430, binding = 6) buffer GaussianBoxes { int gaussian_boxes[]; };
+layout(std430, binding = 7) buffer BoxesDraw { int boxes_draw[4]; };
+
+const int DRAWN_SPRITE = 1;
+const int DRAWN_BOX = 2;
+// Margin (pixels) for the rasteriser's fixed-point snapping of a rectangle's corners.
+const float SNAP = 0.02;
+
+// Half axes of the cut-off ellipse q^T M q <= cut^2 (M = S^-1, target pixels^-2):
+// along M's eigenvectors e, of lengths cut / sqrt(eigenvalue), grown by SNAP. Every
+// pixel centre within the ellipse lies in the rectangle c +- u +- w.
+void cutoff_box(mat2 m, float cut, out vec2 u, out vec2 w) {
+    float a = m[0][0], b = 0.5 * (m[0][1] + m[1][0]), d = m[1][1];
+    float mid = 0.5 * (a + d), r = sqrt(0.25 * (a - d) * (a - d) + b * b);
+    vec2 eigen = max(vec2(mid + r, mid - r), vec2(1.0e-30));
+    // The eigenvector of the larger eigenvalue l, (l - d, b) or (b, l - a) from a
+    // row of M - l I: the one that is not zero where b = 0.
+    vec2 e = a >= d ? vec2(eigen.x - d, b) : vec2(b, eigen.x - a);
+    e = dot(e, e) > 0.0 ? normalize(e) : vec2(1.0, 0.0);
+    vec2 h = cut / sqrt(eigen) + SNAP;
+    u = h.x * e;
+    w = h.y * vec2(-e.y, e.x);
+}
 #endif
 
 #if defined COMPUTE_SHADER
+#if !defined COMPACT
 layout(local_size_x = 64) in;
+#endif
 uniform int u_count;            // records (invocations past it do nothing)
 // The Gaussian of record i: false where it draws nothing (not splatted here, no
 // share left by the triangles, or no pixel within its cut-off).
@@ -65,6 +94,47 @@ bool gaussian_setup(int i, out vec2 c, out mat2 inv, out vec3 value, out float s
     return true;
 }
 
+// A rectangle pays where it has at most half the sprite's pixels and at least
+// BOX_SAVING fewer: its four vertices cost llvmpipe's single-threaded vertex stage
+// more than a sprite's one (drawn as rectangles, the paper preset's round Gaussians
+// made its caustic map 14 -> 19 ms on glass_sphere).
+const float BOX_SAVING = 32.0;
+int drawn_as(mat2 inv, float size) {
+    if (u_tight_boxes == 0) return DRAWN_SPRITE;
+    vec2 u, w;
+    cutoff_box(inv, u_cut, u, w);
+    float box = 4.0 * length(u) * length(w), sprite = size * size;
+    return box <= 0.5 * sprite && sprite - box >= BOX_SAVING ? DRAWN_BOX : DRAWN_SPRITE;
+}
+
+#if defined COMPACT
+// One work group lists the boxed records in record order, so the rectangles blend
+// in the same order on every run: each invocation counts a run of consecutive
+// records, a scan over the group gives each run's first slot.
+layout(local_size_x = 1024) in;
+shared int run_counts[1024];
+void main() {
+    int k = int(gl_LocalInvocationID.x);
+    int per_run = (u_count + 1023) / 1024;
+    int first = k * per_run, last = min(first + per_run, u_count);
+    int own = 0;
+    for (int i = first; i < last; ++i)
+        own += int(gaussians[i * 3].w + 0.5) == DRAWN_BOX ? 1 : 0;
+    run_counts[k] = own;
+    barrier();
+    for (int step = 1; step < 1024; step *= 2) {     // inclusive scan (Hillis-Steele)
+        int left = k >= step ? run_counts[k - step] : 0;
+        barrier();
+        run_counts[k] += left;
+        barrier();
+    }
+    int slot = run_counts[k] - own;
+    for (int i = first; i < last; ++i)
+        if (int(gaussians[i * 3].w + 0.5) == DRAWN_BOX) gaussian_boxes[slot++] = i;
+    if (k == 1023) boxes_draw = int[4](4, run_counts[1023], 0, 0);
+}
+#else
+
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_count) return;
@@ -73,14 +143,32 @@ void main() {
     vec3 value;
     float size;
     bool drawn = gaussian_setup(i, c, inv, value, size);
-    gaussians[i * 3] = vec4(c, size, drawn ? 1.0 : 0.0);
+    gaussians[i * 3] = vec4(c, size, drawn ? float(drawn_as(inv, size)) : 0.0);
     gaussians[i * 3 + 1] = vec4(inv[0], inv[1]);
     gaussians[i * 3 + 2] = vec4(value, 0.0);
 }
+#endif
 #elif defined VERTEX_SHADER
 flat out vec3 v_value;       // W/m^2 at weight 1
 flat out vec2 v_center;      // c (target pixels)
 flat out mat2 v_inverse;     // S^-1 (target pixels^-2)
+#if defined BOXED
+// Instance k: the k-th boxed record; vertex j: corner c -+ u -+ w of its rectangle
+// (a strip).
+void main() {
+    int i = gaussian_boxes[gl_InstanceID];
+    vec4 head = gaussians[i * 3];
+    vec4 inv = gaussians[i * 3 + 1];
+    v_value = gaussians[i * 3 + 2].rgb;
+    v_center = head.xy;
+    v_inverse = mat2(inv.xy, inv.zw);
+    vec2 u, w;
+    cutoff_box(v_inverse, u_cut, u, w);
+    vec2 corner = head.xy + ((gl_VertexID & 1) == 1 ? u : -u)
+        + ((gl_VertexID & 2) == 2 ? w : -w);
+    gl_Position = target_position(corner);
+}
+#else
 void main() {
     vec4 head = gaussians[gl_VertexID * 3];
     vec4 inv = gaussians[gl_VertexID * 3 + 1];
@@ -88,9 +176,10 @@ void main() {
     v_center = head.xy;
     v_inverse = mat2(inv.xy, inv.zw);
     gl_PointSize = max(head.z, 1.0);
-    gl_Position = head.w > 0.5 ? target_position(head.xy)
-                               : vec4(2.0, 2.0, 2.0, 1.0);   // culled
+    gl_Position = int(head.w + 0.5) == DRAWN_SPRITE ? target_position(head.xy)
+                                                     : vec4(2.0, 2.0, 2.0, 1.0);   // culled
 }
+#endif
 #elif defined FRAGMENT_SHADER
 flat in vec3 v_value;
 flat in vec2 v_center;

@@ -50,6 +50,7 @@ uniform float u_max_triangle;     // pixels: wider triangles fall back to Gaussi
 uniform float u_sigma;            // points: Gaussian standard deviation (caustic-map texels)
 uniform float u_cut;              // Gaussian cut-off radius (sigmas)
 uniform float u_max_radius;       // Gaussian sprite radius cap (target pixels)
+uniform int u_tight_boxes;        // 1: long kernels drawn in boxes along their axes
 
 const int SPLAT_POINTS = 0;
 const int SPLAT_FOOTPRINT = 1;
