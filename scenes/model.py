@@ -456,6 +456,12 @@ class Settings:
         "(preset: paper = grid, strong = 4 x grid, 2 x grid where every closed dielectric "
         "is convex).", unit="px", ge=2, le=8192,
     )
+    rim_patches: int | None = spec(
+        None, doc="Rim patches: each grid quad within one grid step of an object's "
+        "silhouette seen from the light is traced again as a patch of n x n quads (n "
+        "odd; 1: none), whose splats replace the quad's; they follow the strongly "
+        "curved refraction at grazing light (preset: paper 1, strong 3).", ge=1, le=9,
+    )
     frustum: Literal["square", "tight"] | None = spec(
         None, doc="Object view of the vertex grid: a square frustum around the objects' "
         "bounding sphere, or a rectangular, asymmetric one fitted to their projection "
@@ -529,6 +535,19 @@ class Settings:
     all_specular_paths: bool = spec(
         False, doc="Count every L S+ D path, not only the chains the effects name."
     )
+
+    def validate(self) -> list[tuple[str, str]]:
+        if self.rim_patches is not None and self.rim_patches % 2 == 0:
+            return [("rim_patches", "must be odd (a patch's vertices include its quad's "
+                     "corners at the finer grid's texel centres)")]
+        if (self.rim_patches or 1) > 1 and self.normalization == "paper":
+            return [("rim_patches", "needs normalization = \"radiometric\" (the paper's "
+                     "Eq. 6 counts the grid's own texels)")]
+        splat = self.splat or ("points" if self.preset == "paper" else "triangles")
+        if (self.rim_patches or 1) > 1 and splat != "triangles":
+            return [("rim_patches", f"needs splat = \"triangles\" (not {splat!r}): a patch "
+                     "replaces its quad's triangles")]
+        return []
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,8 @@ receiver) or ``receiver_irradiance_1.exr``, ``_2`` ... (several; W per (u, v) ar
 row 0 of the EXR at vmin, as in :class:`renderers.results.ReceiverMap`),
 ``caustic_map.exr`` (the caustic-map atlas, W/m^2, top row = last texel row),
 ``hits.npz`` (per grid vertex: origin v, direction r, estimated d per iteration,
-status, ...) and ``result.json`` (receiver_extent, passes, lost_splats, timings,
+status, ...), ``patches.npz`` (the same per rim-patch vertex, with its patch's grid
+``quad``; only with rim patches) and ``result.json`` (receiver_extent, passes, lost_splats, timings,
 timer, metadata; strict JSON, a non-finite number as null with its reason under
 ``null_reasons``).
 """
@@ -45,6 +46,10 @@ def write_outputs(frame: Frame, directory: str | Path) -> list[Path]:
     paths.append(out / "hits.npz")
     with open(paths[-1], "wb") as f:
         np.savez_compressed(f, **frame.hits, status_codes=np.array(list(STATUS)))
+    if frame.patches:
+        paths.append(out / "patches.npz")
+        with open(paths[-1], "wb") as f:
+            np.savez_compressed(f, **frame.patches, status_codes=np.array(list(STATUS)))
     summary = {
         "renderer": result.renderer,
         "receiver_extent": [list(r.extent) for r in result.receivers],

@@ -40,7 +40,9 @@ class TimedRender:
     timer : str
         What ``warm_seconds`` measured, with which clock.
     hits : dict of ndarray or None
-        The caustics-mapping per-vertex records (for the stability checks).
+        The caustics-mapping per-vertex records, grid and rim patches, each vertex's
+        flux at the share its splats draw (``Frame.traced_records``; for the
+        stability checks and the flux budget).
     maps_seconds : float or None
         Median time of the passes that make the receiver maps (s): the scope of the
         equal-error speedup (caustics mapping only).
@@ -86,7 +88,7 @@ def timed_render(method: Method, scene: Scene, *, repeats: int,
         frame, seconds = runner.timed()
         return TimedRender(frame.result, seconds,
                            f"sum of the passes ({frame.result.timer}), median of {repeats} "
-                           "after a warm-up", frame.hits,
+                           "after a warm-up", frame.traced_records(),
                            runner.median(clock=caustic_seconds),
                            runner.ctx.info.get("GL_RENDERER", "unknown"))
     method.render(scene)

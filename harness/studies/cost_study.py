@@ -95,7 +95,8 @@ class CostOutcome:
 def sweep_configs(*, quick: bool, splat: str = "points") -> list[dict]:
     """Settings overrides of the sweep (a smaller set when ``quick``): estimators x
     iterations, grid, map sizes, and the splat width (``points``) or the other
-    kernels (``footprint``, ``triangles``)."""
+    kernels (``footprint``, ``triangles``; the Gaussian kernels without rim patches,
+    which replace triangles)."""
     iterations = (0, 1, 3) if quick else (0, 1, 2, 3, 5, 8)
     grids = (32, 64, 128) if quick else (32, 64, 128, 256)
     maps = (256, 512) if quick else (256, 512, 1024)
@@ -107,7 +108,8 @@ def sweep_configs(*, quick: bool, splat: str = "points") -> list[dict]:
     if splat == "points":
         configs += [{"splat_sigma": s} for s in sigmas]
     else:
-        configs += [{"splat": k} for k in ("points", "footprint", "triangles") if k != splat]
+        configs += [{"splat": k} | ({} if k == "triangles" else {"rim_patches": 1})
+                    for k in ("points", "footprint", "triangles") if k != splat]
     return configs
 
 

@@ -24,13 +24,17 @@ Steps (each a receiver map scored against the reference on receiver 0):
    exact chain drops that the method cannot see (a ray that re-enters the object
    after its exit: the exact step's ``blocked`` fate).
 4. ``estimated hits``: the method itself, receiver hits from the preset's estimator
-   and iteration count (its own render).
+   and iteration count (its own render). With rim patches (``rim_patches`` > 1), the
+   method's grid records alone, re-splatted: the method without its patches;
+5. ``rim patches`` (only then): the method itself, the grid quads near the silhouette
+   replaced by their patches.
 
 Every step's records go through the same splat passes
 (``renderers.caustics_mapping.record_splat``), so two steps differ only in what
 their records say. The study also re-splats the method's own records through that
 hook and records the largest difference from the method's map
-(``notes["resplat_max_abs_difference"]``: 0 when the hook splats as the method does).
+(``notes["resplat_max_abs_difference"]``: 0 when the hook splats as the method does;
+only without rim patches, whose records the hook does not take).
 
 Numbers per step: ``relmse``, ``ssim``, ``flip`` over receiver 0's caustic region
 (``harness.compare.regions``), ``flux_ratio`` over the whole map, ``peak_ratio`` (the
@@ -87,10 +91,12 @@ __all__ = ["FIG10_CLAIM", "IDEAL_KERNEL", "SOURCES", "STEPS", "DecompositionErro
            "image_space_records", "peak_ratio"]
 
 #: Step names in order (``dense exact`` only with a dense grid).
-STEPS = ("dense exact", "exact", "exact+kernel", "image-space surfaces", "estimated hits")
+STEPS = ("dense exact", "exact", "exact+kernel", "image-space surfaces", "estimated hits",
+         "rim patches")
 #: What each step (but step 0) adds, in words.
 SOURCES = {"exact": "grid sampling", "exact+kernel": "the splat kernel",
-           "image-space surfaces": "image-space surfaces", "estimated hits": "estimated hits"}
+           "image-space surfaces": "image-space surfaces", "estimated hits": "estimated hits",
+           "rim patches": "rim patches"}
 #: The kernel of the exact steps: flux / area triangles between neighbouring hits.
 IDEAL_KERNEL = "triangles"
 #: The paper's attribution of its Fig. 10 differences (Section 5), as tested here.
@@ -327,13 +333,28 @@ def decomposition_study(runner: RealtimeRunner, reference, *, noise_floor: float
                        maps.receivers[0].irradiance, method_trace_s + cast_s, splat_s))
     tick()
     method_map = frame.result.receivers[0].irradiance
-    steps.append(_Step("estimated hits", f"receiver hits from the {settings.estimator} "
-                       f"estimator ({'safeguarded, ' if settings.safeguarded else ''}"
-                       f"{settings.iterations} iterations): the method",
-                       method_map, method_trace_s, method_splat_s))
-    resplat = splat_records(scene, split_records(frame.hits), ctx=runner.ctx,
-                            geometry=geometry).receivers[0].irradiance
-    notes["resplat_max_abs_difference"] = float(np.abs(resplat - method_map).max())
+    estimated = (f"receiver hits from the {settings.estimator} estimator "
+                 f"({'safeguarded, ' if settings.safeguarded else ''}"
+                 f"{settings.iterations} iterations)")
+    resplat, resplat_s, _ = _splat_timed(runner, scene, split_records(frame.hits), repeats)
+    if frame.patches:
+        # The grid's records alone are the method without its rim patches; the
+        # patches' own trace pass is the time they add.
+        rim_s = runner.median(clock=lambda timings: timings.get("rim_patches", 0.0))
+        steps.append(_Step("estimated hits", f"{estimated}, the grid's records alone (no rim "
+                           "patches)", resplat.receivers[0].irradiance,
+                           method_trace_s - rim_s, resplat_s))
+        n = settings.rim_patches
+        steps.append(_Step("rim patches", f"the quads at the silhouette traced again as "
+                           f"{n} x {n} patches: the method", method_map, method_trace_s,
+                           method_splat_s))
+        notes["rim_patches"] = {"factor": n,
+                                "traced": frame.result.metadata.get("rim_patches_traced")}
+    else:
+        steps.append(_Step("estimated hits", f"{estimated}: the method", method_map,
+                           method_trace_s, method_splat_s))
+        notes["resplat_max_abs_difference"] = float(
+            np.abs(resplat.receivers[0].irradiance - method_map).max())
     tick()
 
     table = _table(steps, ref, mask=mask, exposure=exposure)

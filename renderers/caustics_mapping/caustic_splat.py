@@ -85,7 +85,6 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
                                            geometry=True)]
     for program in programs:
         uniforms(program)
-        set_uniform(program, "u_grid", options.grid)
         set_uniform(program, "u_splat_mode", SPLAT_MODES[options.mode])
         set_uniform(program, "u_footprint_scale", float(options.footprint_scale))
         set_uniform(program, "u_max_triangle", MAX_TRIANGLE_PX)
@@ -101,8 +100,9 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
     resources = pool(ctx)
     arrays = []
     for trace in traces:
-        views = trace.count // (options.grid * options.grid)
-        quads = views * (options.grid - 1) ** 2
+        grid = trace.grid or options.grid
+        views = trace.count // (grid * grid)
+        quads = views * (grid - 1) ** 2
         triangles, buffers = None, ()
         if stages and quads > 0:
             triangles = ctx.vertex_array(programs[-1], [])
@@ -120,6 +120,14 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
             before_pass(k, programs)
         for trace, points, quads, triangles, buffers, splats in arrays:
             trace.records.bind_to_storage_buffer(0)
+            # The trace's own lattice: the grid (its patched quads left to the
+            # patches) or rim patches.
+            for program in programs:
+                set_uniform(program, "u_grid", trace.grid or options.grid)
+                set_uniform(program, "u_patches", int(trace.patches))
+                set_uniform(program, "u_handoff", int(trace.handoff is not None))
+            if trace.handoff is not None:
+                trace.handoff.bind_to_storage_buffer(8)
             if triangles is not None:
                 # The triangles first: they record which quads they draw, and a
                 # vertex's Gaussian carries the quarters of the others.

@@ -30,10 +30,21 @@
 // exit ray is also tested for re-entering its object (reenters()): the L T T D chain
 // ends there, so such a vertex is STATUS_REENTERED and not splatted; so is a verified
 // reflected ray that meets its object again before its hit (reflection_blocked()).
+//
+// Rim patches (u_patches = 1): the records are those of the patches listed by
+// rim_patches.glsl, (n + 1)^2 vertices per patch (n = u_front_stride), record
+// (k * (n + 1) + j) * (n + 1) + i for vertex (i, j) of patch k: the quad's corners
+// and the n - 1 points between them along each axis, at the centres of the front
+// atlas's texels. The front atlas then has n texels per grid step (u_front_stride):
+// the grid's own vertices read its texels n * t + (n - 1) / 2 (the same light rays
+// as texel t of a grid-sized atlas), and so do the re-entry and reflection tests,
+// so both traces see the surfaces at the grid's resolution but for the vertices'
+// own first hits.
 #include "common.glsl"
 
 layout(std430, binding = 0) writeonly buffer Records { vec4 records[]; };
 layout(std430, binding = 1) writeonly buffer History { float history[]; };
+layout(std430, binding = 2) readonly buffer RimPatches { int patch_quads[]; };
 
 uniform sampler2D u_receiver_positions;   // map atlas, RGBA32F (see common.glsl)
 uniform sampler2D u_receiver_normals;
@@ -43,6 +54,8 @@ uniform sampler2D u_front_normals;
 uniform sampler2D u_back_positions;      // object atlas at u_back_size texels per view
 uniform sampler2D u_back_normals;
 uniform int u_grid;
+uniform int u_front_stride;     // front-atlas texels per grid step (odd)
+uniform int u_patches;          // 1: the records are rim patches (see the header)
 uniform int u_back_size;
 uniform sampler2D u_far_positions;        // object atlas: the conductors' farthest surfaces
 uniform sampler2D u_far_normals;
@@ -73,6 +86,12 @@ uniform float u_covered;        // V, grid texels covered (occlusion query)
 uniform int u_estimator;        // 0 modified, 1 newton, 2 secant
 uniform int u_safeguarded;
 uniform int u_exit_iterations;  // refinements of the exit point (double refraction)
+
+// The texel of an atlas with `stride` texels per step of a `size`-texel lattice per
+// view that lies on the light ray through the lattice's texel t of view `face`.
+ivec2 atlas_texel(int face, ivec2 t, int size, int stride) {
+    return ivec2(face * size * stride, 0) + stride * t + (stride - 1) / 2;
+}
 
 const int STATUS_NO_EXIT = 5;   // double refraction found no exit surface
 const int STATUS_REENTERED = 7; // the exit (or reflected) ray meets its object again
@@ -242,13 +261,14 @@ bool find_exit(vec3 v, vec3 r, int object, out float d, out vec3 bn) {
 // The first surface of `object` the light sees through x in an object atlas
 // (`size` texels per view; nearest texel): its distance from the light along the
 // light ray; false where that texel shows no surface of `object`.
-bool surface_depth(sampler2D positions, int size, vec3 x, int object, out float depth) {
+bool surface_depth(sampler2D positions, int size, int stride, vec3 x, int object,
+                   out float depth) {
     int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
     vec2 ndc;
     depth = 0.0;
     if (!project(u_obj_vp[face], x, ndc)) return false;
-    ivec2 t = ivec2(face * size, 0) + min(ivec2(floor((ndc * 0.5 + 0.5) * float(size))),
-                                          ivec2(size - 1));
+    ivec2 t = atlas_texel(face, min(ivec2(floor((ndc * 0.5 + 0.5) * float(size))),
+                                    ivec2(size - 1)), size, stride);
     vec4 p = texelFetch(positions, t, 0);
     depth = light_distance(p.xyz);
     return abs(p.w - float(object + 1)) < 0.5;
@@ -294,9 +314,11 @@ bool reenters(vec3 e, vec3 r, int object) {
         float margin = view / float(u_grid) * (u_obj_persp == 1 ? length(x - u_light_pos) : 1.0);
         if (length(x - e) < 2.0 * margin) continue;
         float front, back, dx = light_distance(x);
-        if (!surface_depth(u_front_positions, u_grid, x, object, front)) continue;
+        if (!surface_depth(u_front_positions, u_grid, u_front_stride, x, object, front))
+            continue;
         if (dx < front + 0.25 * margin) continue;
-        if (surface_depth(u_back_positions, u_back_size, x, object, back) && dx < back - 0.25 * margin)
+        if (surface_depth(u_back_positions, u_back_size, 1, x, object, back)
+            && dx < back - 0.25 * margin)
             return true;
     }
     return false;
@@ -308,16 +330,16 @@ bool reenters(vec3 e, vec3 r, int object) {
 // point and normal seen; `have_prev`: whether there is one). `edge`: a sample whose
 // texel shows no object, after one behind an edge-on sheet (|cos| to the light below
 // GRAZING), left through that sheet (see reflection_blocked).
-bool crosses_layer(sampler2D positions, sampler2D normals, bool edge, vec3 x, int object,
-                   float step, float w, inout float s_prev, inout vec3 f_prev,
+bool crosses_layer(sampler2D positions, sampler2D normals, int stride, bool edge, vec3 x,
+                   int object, float step, float w, inout float s_prev, inout vec3 f_prev,
                    inout vec3 n_prev, inout bool have_prev) {
     int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
     vec2 ndc;
     vec4 f = vec4(0.0);
     ivec2 t = ivec2(0);
     if (project(u_obj_vp[face], x, ndc)) {
-        t = ivec2(face * u_grid, 0) + min(ivec2(floor((ndc * 0.5 + 0.5) * float(u_grid))),
-                                          ivec2(u_grid - 1));
+        t = atlas_texel(face, min(ivec2(floor((ndc * 0.5 + 0.5) * float(u_grid))),
+                                  ivec2(u_grid - 1)), u_grid, stride);
         f = texelFetch(positions, t, 0);
     }
     if (abs(f.w - float(object + 1)) >= 0.5) {
@@ -371,10 +393,11 @@ bool reflection_blocked(vec3 v, vec3 r, float d, int object, bool edge) {
         vec3 x = v + (step * float(k)) * r;
         float w = view / float(u_grid) * (u_obj_persp == 1 ? length(x - u_light_pos) : 1.0);
         if (step * float(k) < 2.0 * w) continue;
-        if (crosses_layer(u_front_positions, u_front_normals, edge, x, object, step, w,
-                          s_front, f_front, n_front, have_front)) return true;
-        if (u_has_far == 1 && crosses_layer(u_far_positions, u_far_normals, false, x, object,
-                                            step, w, s_far, f_far, n_far, have_far))
+        if (crosses_layer(u_front_positions, u_front_normals, u_front_stride, edge, x,
+                          object, step, w, s_front, f_front, n_front, have_front))
+            return true;
+        if (u_has_far == 1 && crosses_layer(u_far_positions, u_far_normals, 1, false, x,
+                                            object, step, w, s_far, f_far, n_far, have_far))
             return true;
     }
     return false;
@@ -398,14 +421,34 @@ void main() {
     gl_PointSize = 1.0;
     int id = gl_VertexID;
 #endif
-    int per_view = u_grid * u_grid;
-    int view = id / per_view;
-    int local = id - view * per_view;
-    int tx = local % u_grid;
-    int ty = local / u_grid;
+    // The vertex's view and its front-atlas texel `at` within the view; `cells`
+    // texels per view of the vertex lattice (its flux is one such texel's).
+    int view, cells;
+    ivec2 at;
+    vec2 ndc;
+    int stride = u_front_stride;
+    if (u_patches == 1) {
+        int side = stride + 1, quads = u_grid - 1;
+        int k = id / (side * side), local = id - k * side * side;
+        int q = patch_quads[k];
+        view = q / (quads * quads);
+        int within = q - view * quads * quads;
+        at = stride * ivec2(within % quads, within / quads) + (stride - 1) / 2
+            + ivec2(local % side, local / side);
+        cells = u_grid * stride;
+        ndc = (vec2(at) + 0.5) / float(cells) * 2.0 - 1.0;
+    } else {
+        int per_view = u_grid * u_grid;
+        view = id / per_view;
+        int local = id - view * per_view;
+        ivec2 t = ivec2(local % u_grid, local / u_grid);
+        at = stride * t + (stride - 1) / 2;
+        cells = u_grid;
+        ndc = (vec2(t) + 0.5) / float(u_grid) * 2.0 - 1.0;
+    }
     int base = id * 5;
     int hbase = id * (u_iterations + 1);
-    ivec2 a = ivec2(view * u_grid + tx, ty);
+    ivec2 a = ivec2(view * u_grid * stride, 0) + at;
     vec4 fp = texelFetch(u_front_positions, a, 0);
     int object = int(fp.w + 0.5) - 1;
     if (object < 0 || u_material[object] == 0) {
@@ -426,8 +469,7 @@ void main() {
     if (u_paper == 1) {
         flux = u_light_power * max(dot(n, -l), 0.0) / max(u_covered, 1.0);
     } else {
-        vec2 ndc = (vec2(tx, ty) + 0.5) / float(u_grid) * 2.0 - 1.0;
-        flux = u_light_power * light_falloff(l) * texel_measure(u_obj_persp, u_obj_rect, u_grid, ndc);
+        flux = u_light_power * light_falloff(l) * texel_measure(u_obj_persp, u_obj_rect, cells, ndc);
     }
     vec3 mask = u_channel < 0 ? vec3(1.0) : vec3(equal(ivec3(0, 1, 2), ivec3(u_channel)));
     flux *= mask;

@@ -11,6 +11,7 @@ the renderer reads both back for ``hits.npz`` and for the NumPy mirror in
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import moderngl
 import numpy as np
@@ -25,6 +26,9 @@ from renderers.caustics_mapping.uniforms import (
     set_uniform,
 )
 from scenes.model import ConductorMaterial, DielectricMaterial
+
+if TYPE_CHECKING:
+    from renderers.caustics_mapping.rim_patches import RimPatches
 
 __all__ = ["CONVERGED", "ESTIMATORS", "STATUS", "MaterialTable", "Trace", "TraceOptions",
            "material_table", "run_caustic_trace", "trace_options"]
@@ -169,12 +173,23 @@ class Trace:
     history : moderngl.Buffer
         ``count`` x (iterations + 1) float32 estimates (m).
     count, iterations : int
+    grid : int
+        Vertices per side of each view's lattice (0: the settings' grid); a rim patch
+        counts as a view of ``rim_patches + 1``.
+    patches : bool
+        The records are rim patches (``caustic_trace.glsl``).
+    handoff : moderngl.Buffer, optional
+        Per grid quad, 1 where a rim patch is drawn instead
+        (:class:`.rim_patches.RimPatches`).
     """
 
     records: moderngl.Buffer
     history: moderngl.Buffer
     count: int
     iterations: int
+    grid: int = 0
+    patches: bool = False
+    handoff: moderngl.Buffer | None = None
 
     def read(self) -> dict[str, np.ndarray]:
         """The records as arrays: origin (K, 3), direction (K, 3), distance (K,),
@@ -202,6 +217,7 @@ def run_caustic_trace(
     front: ObjectSurfaces, back: ObjectSurfaces | None, materials: MaterialTable,
     grid: int, options: TraceOptions, back_size: int | None = None, channel: int = -1,
     paper: bool = False, covered: int = 0, far: ObjectSurfaces | None = None,
+    front_stride: int = 1, patches: RimPatches | None = None,
 ) -> Trace:
     """Run the vertex grid once; returns the record and history buffers.
 
@@ -218,9 +234,16 @@ def run_caustic_trace(
         The conductors' farthest surfaces at ``grid`` texels per view: with verified
         hits a reflected ray is also tested against this layer for meeting its object
         again.
+    front_stride : int
+        Texels of ``front`` per grid step (odd; ``grid * front_stride`` per view).
+    patches : RimPatches, optional
+        Trace these rim patches' vertices (``front_stride + 1`` per side each, record
+        layout in ``caustic_trace.glsl``) instead of the grid's.
     """
     iterations = options.iterations
     count = len(light.object_views) * grid * grid
+    if patches is not None:
+        count = patches.count * (front_stride + 1) ** 2
     resources = pool(ctx)
     records = resources.buffer(count * RECORD_FLOATS * 4)        # every record is written
     history = resources.buffer(count * (iterations + 1) * 4)     # every entry is written
@@ -263,10 +286,15 @@ def run_caustic_trace(
         ("u_start_distance", float(options.start_distance)), ("u_verify", int(options.verify)),
         ("u_hit_tolerance", float(options.hit_tolerance or 0.0)), ("u_count", count),
         ("u_converged", float(options.converged)), ("u_has_far", int(far is not None)),
+        ("u_front_stride", front_stride), ("u_patches", int(patches is not None)),
     ):
         set_uniform(program, name, value)
     records.bind_to_storage_buffer(0)
     history.bind_to_storage_buffer(1)
+    if patches is not None:
+        patches.quads.bind_to_storage_buffer(2)
     program.run((count + 63) // 64)
     ctx.memory_barrier()
+    if patches is not None:
+        return Trace(records, history, count, iterations, grid=front_stride + 1, patches=True)
     return Trace(records, history, count, iterations)

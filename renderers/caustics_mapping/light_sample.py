@@ -37,6 +37,12 @@ from renderers.caustics_mapping.meshes import convex, upload_mesh
 from renderers.caustics_mapping.object_positions import render_object_surfaces
 from renderers.caustics_mapping.receiver_positions import render_receiver_positions
 from renderers.caustics_mapping.receiver_splat import splat_receiver_map, uv_mapping
+from renderers.caustics_mapping.rim_patches import (
+    RimPatches,
+    find_rim_patches,
+    grid_shares,
+    patch_shares,
+)
 from renderers.caustics_mapping.shadow_map import render_shadow_map
 from scenes import Scene
 from scenes.geometry import SceneGeometry
@@ -76,10 +82,12 @@ class Accumulator:
     passes: list[str] = field(default_factory=list)
     caustic_total: np.ndarray | None = None
     hits: list[dict[str, np.ndarray]] = field(default_factory=list)
+    patches: list[dict[str, np.ndarray]] = field(default_factory=list)
     lookups: list[MapLookup] = field(default_factory=list)
     covered_total: int = 0
     map_faces: set[int] = field(default_factory=set)
     splat_sigma: list[float] = field(default_factory=list)
+    rim_patches: int = 0
 
     def ran(self, name: str) -> None:
         if name not in self.passes:
@@ -204,8 +212,9 @@ def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: i
             np.stack([v.view_proj for v in light.map_views]), s.positions_map,
             light.cube, light.position.copy(), np.array(light.slots),
             rect=light.map_views[0].bounds, perspective=light.map_views[0].perspective))
-    front, back, traces = _trace_objects(state, light, positions=positions)
-    caustic = splat_maps(state, light, faces=faces, traces=traces, positions=positions)
+    front, back, traces, (rim, patches) = _trace_objects(state, light, positions=positions)
+    caustic = splat_maps(state, light, faces=faces, traces=traces + patches,
+                         positions=positions)
     shadow = None
     if "shadows" in state.effects:
         with timer.measure("shadow_map"):
@@ -228,18 +237,38 @@ def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: i
         atlas = _read_rgba(caustic)[:, :, :3]
         acc.caustic_total = atlas.copy() if acc.caustic_total is None \
             else acc.caustic_total + atlas
-    for channel, trace in zip(setup.channels, traces, strict=False):
-        data = trace.read()
-        data["channel"] = np.full(trace.count, channel, np.int32)
-        data["light"] = np.full(trace.count, light_index, np.int32)
-        acc.hits.append(data)
-        trace.give_back(resources)
-    for resource in (front, back, positions):
+    _read_records(state, traces, rim, patches, light_index=light_index)
+    for resource in (front, back, positions, rim, *patches):
         if resource is not None:
             resource.give_back(resources)
     for texture in (caustic, shadow):
         if texture is not None:
             resources.give_back(texture)
+
+
+def _read_records(state: FrameState, traces: list[Trace], rim: RimPatches | None,
+                  patches: list[Trace], *, light_index: int) -> None:
+    """The traces' records into ``state.acc.hits`` (grid) and ``.patches`` (rim
+    patches), each with its ``share`` (:func:`.rim_patches.grid_shares`,
+    :func:`.rim_patches.patch_shares`) and the patches' ``quad``; the traces go back
+    to the pool."""
+    setup, acc, s = state.setup, state.acc, state.scene.settings
+    quads = rim.read_quads() if rim is not None else np.zeros(0, np.int32)
+    for channel, trace in zip(setup.channels, traces, strict=False):
+        data = trace.read()
+        data["share"] = grid_shares(quads, views=trace.count // s.grid**2, grid=s.grid)
+        data["channel"] = np.full(trace.count, channel, np.int32)
+        data["light"] = np.full(trace.count, light_index, np.int32)
+        acc.hits.append(data)
+        trace.give_back(pool(state.ctx))
+    for channel, trace in zip(setup.channels, patches, strict=False):
+        data = trace.read()
+        side = (s.rim_patches + 1) ** 2
+        data["quad"] = np.repeat(quads, side)
+        data["share"] = np.tile(patch_shares(s.rim_patches), len(quads))
+        data["channel"] = np.full(trace.count, channel, np.int32)
+        data["light"] = np.full(trace.count, light_index, np.int32)
+        acc.patches.append(data)
 
 
 def _camera_back(state: FrameState) -> CameraBackFaces | None:
@@ -259,15 +288,17 @@ def _camera_back(state: FrameState) -> CameraBackFaces | None:
 
 
 def _trace_objects(state: FrameState, light: LightSetup, *, positions):
-    """Object surfaces from the light (front; back for double refraction), then one
-    caustic trace per channel. Returns (front, back, traces)."""
+    """Object surfaces from the light (front, at ``rim_patches`` texels per grid step;
+    back for double refraction), then one caustic trace per channel, and the rim
+    patches' traces. Returns (front, back, traces, (rim patches, their traces))."""
     ctx, setup, acc, timer = state.ctx, state.setup, state.acc, state.timer
     s = state.scene.settings
     traces: list[Trace] = []
     if not setup.caustic_objects:
-        return None, None, traces
+        return None, None, traces, (None, [])
+    stride = s.rim_patches
     with timer.measure("object_positions.front"):
-        front = render_object_surfaces(ctx, light, setup.objects, grid=s.grid,
+        front = render_object_surfaces(ctx, light, setup.objects, grid=s.grid * stride,
                                        which=setup.caustic_objects, count=setup.paper)
     acc.ran("object_positions.front")
     acc.covered_total += front.covered
@@ -286,20 +317,34 @@ def _trace_objects(state: FrameState, light: LightSetup, *, positions):
             far = render_object_surfaces(ctx, light, setup.objects, grid=s.grid,
                                          which=conductors, farthest=True)
         acc.ran("object_positions.far")
+    def trace(channel: int, patches: RimPatches | None = None) -> Trace:
+        return run_caustic_trace(
+            ctx, light, positions=positions, front=front, back=back,
+            materials=setup.materials, grid=s.grid, back_size=s.back_resolution,
+            options=trace_options(s, setup.eps), channel=channel, paper=setup.paper,
+            covered=front.covered, far=far, front_stride=stride, patches=patches)
+
     for channel in setup.channels:
         name = f"caustic_trace.{setup.paths}" + (
             f".{CHANNELS[channel]}" if channel >= 0 else "")
         with timer.measure(name):
-            trace = run_caustic_trace(
-                ctx, light, positions=positions, front=front, back=back,
-                materials=setup.materials, grid=s.grid, back_size=s.back_resolution,
-                options=trace_options(s, setup.eps), channel=channel,
-                paper=setup.paper, covered=front.covered, far=far)
+            traces.append(trace(channel))
         acc.ran(name)
-        traces.append(trace)
+    rim, patches = None, []
+    if stride > 1:
+        # The quads near the silhouette, from the first trace (which vertices show an
+        # object does not depend on the channel), traced again as patches.
+        with timer.measure("rim_patches"):
+            rim = find_rim_patches(ctx, traces[0], grid=s.grid, factor=stride)
+            for channel, coarse in zip(setup.channels, traces, strict=True):
+                coarse.handoff = rim.handoff
+                if rim.count:
+                    patches.append(trace(channel, rim))
+        acc.ran("rim_patches")
+        acc.rim_patches += rim.count
     if far is not None:
         far.give_back(pool(ctx))
-    return front, back, traces
+    return front, back, traces, (rim, patches)
 
 
 def splat_maps(state: FrameState, light: LightSetup, *, faces: tuple[int, ...],
@@ -314,7 +359,8 @@ def splat_maps(state: FrameState, light: LightSetup, *, faces: tuple[int, ...],
     with timer.measure("caustic_map"):
         sigma = s.splat_sigma
         if sigma is None and s.splat == "points":
-            sigma = mean_hit_spacing_texels(traces, light, grid=s.grid, caustic_size=csize)
+            grid_traces = [t for t in traces if not t.patches]
+            sigma = mean_hit_spacing_texels(grid_traces, light, grid=s.grid, caustic_size=csize)
         elif sigma is None:
             sigma = FALLBACK_TEXELS     # only Gaussians without neighbours use it
         acc.splat_sigma.append(float(sigma))

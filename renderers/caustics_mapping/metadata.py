@@ -29,7 +29,8 @@ class MethodMetadata:
         Share of the flux of every traced vertex (all but ``empty``; summed over
         channels) per status: e.g. ``tir`` is the flux lost to total internal
         reflection at the exit surface, ``unconverged`` the flux verified hits held
-        back.
+        back. These flux parts count the grid's and the rim patches' vertices, each
+        at the share of its flux the splats draw (``Frame.traced_records``).
     light_views : str
         ``"cube"`` for a point light, else the single view's name.
     map_faces : list of str
@@ -45,8 +46,10 @@ class MethodMetadata:
         ``paper`` or ``strong``.
     estimator, safeguarded, iterations, grid, caustic_map, positions_map, normalization
         The settings used (after the preset filled the unset ones).
-    lookup, back_resolution, frustum, verify_hits, start, splat
+    lookup, back_resolution, frustum, verify_hits, start, splat, rim_patches
         The preset-dependent choices used.
+    rim_patches_traced : int
+        Rim patches traced, summed over light samples (0 without).
     splat_sigma : list of float
         Width of the Gaussians per light sample (caustic-map texels): ``points``'
         width, or the fallback of Gaussians without neighbours.
@@ -83,6 +86,8 @@ class MethodMetadata:
     normalization: str
     lookup: str
     back_resolution: int
+    rim_patches: int
+    rim_patches_traced: int
     frustum: str
     verify_hits: bool
     start: str

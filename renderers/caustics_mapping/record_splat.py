@@ -9,7 +9,9 @@ receiver positions (the (u, v) of hits on receivers whose (u, v) is not affine),
 then ``light_sample.splat_maps``: the caustic map with the kernel the settings
 name and, from the same records, each receiver's (u, v) irradiance map. Nothing is
 splatted differently, so two record sets differ in their maps only by what their
-records say.
+records say. The records are the grid's: a frame's rim patches (``rim_patches``
+> 1) are traced from its grid, not handed in, so the hook splats every quad as a
+frame with ``rim_patches = 1`` does.
 
 Record layout (``caustic_trace.glsl``), ``float32``, shape (views * grid * grid, 5, 4),
 record ``(view * grid + ty) * grid + tx`` for grid vertex (tx, ty) of object view

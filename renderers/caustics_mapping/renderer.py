@@ -34,8 +34,6 @@ from scenes.geometry import SceneGeometry, build_geometry
 
 __all__ = ["Frame", "newton_eps", "render", "render_frame"]
 
-
-
 @dataclass(eq=False)
 class Frame:
     """Everything one render produced.
@@ -48,7 +46,9 @@ class Frame:
         ``direction`` (K, 3) r, ``history`` (K, iterations + 1) estimated d (m) after
         each iteration, ``distance`` (K,) final d, ``hit`` (K, 3), ``status`` (K,)
         (:data:`.caustic_trace.STATUS`), ``flux`` (K, 3), ``receiver`` (K,), ``view``
-        (K,) object view, ``channel`` (K,) (-1 all), ``light`` (K,) light sample.
+        (K,) object view, ``channel`` (K,) (-1 all), ``light`` (K,) light sample,
+        ``share`` (K,) the part of the vertex's flux its splats draw (1 but next to
+        rim patches, :func:`.rim_patches.grid_shares`).
     caustic_map : ndarray (M, slots * M, 3)
         The caustic-map atlas (W/m^2), row 0 at the bottom, one slot per stored map
         view (``metadata["map_faces"]`` in order); summed over light samples.
@@ -56,6 +56,11 @@ class Frame:
         The receiver positions atlas read back, per light sample (for the mirror).
     eps : float
         Newton's finite-difference step used (m).
+    patches : dict of ndarray
+        Per rim-patch vertex (``settings.rim_patches``; layout in
+        ``caustic_trace.glsl``), the fields of ``hits`` and ``quad`` (K,), the grid
+        quad its patch replaces; ``share`` from :func:`.rim_patches.patch_shares`.
+        Empty without patches.
     """
 
     result: RenderResult
@@ -63,6 +68,27 @@ class Frame:
     caustic_map: np.ndarray
     lookups: list[MapLookup] = field(default_factory=list)
     eps: float = 0.0
+    patches: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def traced_records(self) -> dict[str, np.ndarray]:
+        """Grid and rim-patch vertices together, for flux accounts: ``status``,
+        ``origin``, ``direction``, ``receiver`` and ``flux`` (K, 3) W, each vertex's
+        flux times its ``share``, so the splatted vertices' flux is what the maps
+        received."""
+        return traced_records(self.hits, self.patches)
+
+
+def traced_records(hits: dict[str, np.ndarray],
+                   patches: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """:meth:`Frame.traced_records` of a frame's ``hits`` and ``patches``."""
+    parts = [hits] + ([patches] if patches and len(patches["status"]) else [])
+    out = {key: np.concatenate([np.asarray(p[key]) for p in parts])
+           for key in ("status", "origin", "direction", "receiver")}
+    share = np.concatenate([np.asarray(p.get("share", np.ones(len(p["status"]))), np.float64)
+                            for p in parts])
+    out["flux"] = np.concatenate([np.asarray(p["flux"], np.float64) for p in parts]) \
+        * share[:, None]
+    return out
 
 
 def render_frame(
@@ -139,7 +165,9 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
         raise GLError(f"OpenGL error after rendering {scene.name}: {error}")
 
     merged = _merge(acc.hits, s.iterations)
-    metadata = _metadata(state, merged=merged, lights=lights)
+    patches = _merge(acc.patches, s.iterations) if acc.patches else {}
+    metadata = _metadata(state, merged=merged, records=traced_records(merged, patches),
+                         lights=lights)
     result = RenderResult(
         renderer="caustics_mapping", camera=acc.camera,
         receivers=tuple(ReceiverMap(m, g.extent)
@@ -152,18 +180,20 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
     caustic_total = acc.caustic_total
     if caustic_total is None:
         caustic_total = np.zeros((s.caustic_map, s.caustic_map, 3), np.float32)
-    return Frame(result, merged, caustic_total, acc.lookups, setup.eps)
+    return Frame(result, merged, caustic_total, acc.lookups, setup.eps, patches)
 
 
 def _metadata(state: FrameState, *, merged: dict[str, np.ndarray],
-              lights: list[LightSetup]) -> MethodMetadata:
+              records: dict[str, np.ndarray], lights: list[LightSetup]) -> MethodMetadata:
+    """Counts of the grid's vertices (``merged``); flux parts of every traced vertex,
+    rim patches included, each at its share (``records``)."""
     scene, ctx, geometry, setup, acc = (state.scene, state.ctx, state.geometry, state.setup,
                                         state.acc)
     s = scene.settings
-    status = merged["status"]
-    counts = {name: int(np.sum(status == code)) for name, code in STATUS.items()}
-    lost_flux = merged["flux"][status == STATUS["lost"]].sum(axis=0)
-    per_vertex = merged["flux"].sum(axis=1)
+    counts = {name: int(np.sum(merged["status"] == code)) for name, code in STATUS.items()}
+    status = records["status"]
+    lost_flux = records["flux"][status == STATUS["lost"]].sum(axis=0)
+    per_vertex = records["flux"].sum(axis=1)
     traced = float(per_vertex[status != STATUS["empty"]].sum())
     fractions = {name: float(per_vertex[status == code].sum()) / traced if traced > 0 else 0.0
                  for name, code in STATUS.items() if name != "empty"}
@@ -173,7 +203,7 @@ def _metadata(state: FrameState, *, merged: dict[str, np.ndarray],
         lost_splats=counts["lost"],
         status_counts=counts,
         lost_flux=[float(x) for x in lost_flux],
-        splatted_flux=[float(x) for x in merged["flux"][status == STATUS["hit"]].sum(axis=0)],
+        splatted_flux=[float(x) for x in records["flux"][status == STATUS["hit"]].sum(axis=0)],
         status_flux_fraction=fractions,
         light_views="cube" if first.cube else first.map_views[0].name,
         map_faces=[CUBE_FACES[f] if first.cube else first.map_views[f].name
@@ -184,7 +214,8 @@ def _metadata(state: FrameState, *, merged: dict[str, np.ndarray],
         preset=s.preset, estimator=s.estimator, safeguarded=bool(s.safeguarded),
         iterations=s.iterations, grid=s.grid, caustic_map=s.caustic_map,
         positions_map=s.positions_map, normalization=s.normalization, lookup=s.lookup,
-        back_resolution=s.back_resolution, frustum=s.frustum,
+        back_resolution=s.back_resolution, rim_patches=s.rim_patches,
+        rim_patches_traced=acc.rim_patches, frustum=s.frustum,
         verify_hits=bool(s.verify_hits), start=s.start, splat=s.splat,
         splat_sigma=list(acc.splat_sigma), newton_eps=setup.eps,
         channels=[CHANNELS[c] if c >= 0 else "rgb" for c in setup.channels],
@@ -201,7 +232,8 @@ def _merge(hits: list[dict[str, np.ndarray]], iterations: int) -> dict[str, np.n
                 "hit": empty3, "status": np.zeros(0, np.int32), "flux": empty3,
                 "receiver": np.zeros(0, np.int32), "normal": empty3,
                 "view": np.zeros(0, np.int32), "history": np.zeros((0, iterations + 1), np.float32),
-                "channel": np.zeros(0, np.int32), "light": np.zeros(0, np.int32)}
+                "channel": np.zeros(0, np.int32), "light": np.zeros(0, np.int32),
+                "share": np.zeros(0, np.float32)}
     return {key: np.concatenate([h[key] for h in hits]) for key in hits[0]}
 
 

@@ -108,33 +108,17 @@ int drawn_as(mat2 inv, float size) {
 }
 
 #if defined COMPACT
-// One work group lists the boxed records in record order, so the rectangles blend
-// in the same order on every run: each invocation counts a run of consecutive
-// records, a scan over the group gives each run's first slot.
+// The boxed records in record order (compact.glsl), so the rectangles blend in the
+// same order on every run.
 layout(local_size_x = 1024) in;
-shared int run_counts[1024];
-void main() {
-    int k = int(gl_LocalInvocationID.x);
-    int per_run = (u_count + 1023) / 1024;
-    int first = k * per_run, last = min(first + per_run, u_count);
-    int own = 0;
-    for (int i = first; i < last; ++i)
-        own += int(gaussians[i * 3].w + 0.5) == DRAWN_BOX ? 1 : 0;
-    run_counts[k] = own;
-    barrier();
-    for (int step = 1; step < 1024; step *= 2) {     // inclusive scan (Hillis-Steele)
-        int left = k >= step ? run_counts[k - step] : 0;
-        barrier();
-        run_counts[k] += left;
-        barrier();
-    }
-    int slot = run_counts[k] - own;
-    for (int i = first; i < last; ++i)
-        if (int(gaussians[i * 3].w + 0.5) == DRAWN_BOX) gaussian_boxes[slot++] = i;
-    if (k == 1023) boxes_draw = int[4](4, run_counts[1023], 0, 0);
-}
-#else
+#include "compact.glsl"
 
+bool compact_listed(int i) { return int(gaussians[i * 3].w + 0.5) == DRAWN_BOX; }
+void compact_store(int slot, int i) { gaussian_boxes[slot] = i; }
+void compact_total(int count) { boxes_draw = int[4](4, count, 0, 0); }
+
+void main() { compact(u_count); }
+#else
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_count) return;

@@ -27,7 +27,13 @@
 // (pixel_integrals), so the pixels' values sum to the triangle's flux.
 //
 // The record buffer (caustic_trace.glsl's layout) is read as an SSBO: record i is
-// grid vertex (view, tx, ty) with i = (view * u_grid + ty) * u_grid + tx.
+// grid vertex (view, tx, ty) with i = (view * u_grid + ty) * u_grid + tx. Rim patches
+// (u_patches = 1, caustic_trace.glsl) are drawn as views of their own (u_grid = the
+// patch's vertices per side): their borders lie inside the object, so they are not
+// a silhouette, and a border vertex's Gaussian carries only the quarters of its own
+// patch's quads (the neighbouring quad or patch holds its own copy of the vertex).
+// The grid's quads that have a patch are left to it (u_handoff, handoff[]): not
+// drawn, and no vertex's Gaussian carries their quarters.
 //
 // Each pass defines, before including this file:
 //   bool to_target(int record, out vec2 pix)  // the record's hit in target pixels,
@@ -51,6 +57,7 @@ uniform float u_sigma;            // points: Gaussian standard deviation (causti
 uniform float u_cut;              // Gaussian cut-off radius (sigmas)
 uniform float u_max_radius;       // Gaussian sprite radius cap (target pixels)
 uniform int u_tight_boxes;        // 1: long kernels drawn in boxes along their axes
+uniform int u_patches;            // 1: the records are rim patches
 
 const int SPLAT_POINTS = 0;
 const int SPLAT_FOOTPRINT = 1;
@@ -111,7 +118,10 @@ bool near_silhouette(int view, int tx, int ty) {
         for (int k = 0; k < 4; ++k) {
             ivec2 o = step * ivec2(k == 0 ? 1 : k == 1 ? -1 : 0, k == 2 ? 1 : k == 3 ? -1 : 0);
             int x = tx + o.x, y = ty + o.y;
-            if (x < 0 || y < 0 || x >= u_grid || y >= u_grid) return true;
+            if (x < 0 || y < 0 || x >= u_grid || y >= u_grid) {
+                if (u_patches == 1) continue;
+                return true;
+            }
             if (splat_records[grid_record(view, x, y) * 5 + 2].w < 0.5) return true;
         }
     }
@@ -129,7 +139,7 @@ mat2 footprint_covariance(int view, int tx, int ty, vec2 centre, float fallback_
     if (!has_x) ex = vec2(-ey.y, ey.x);      // square cell: the missing axis turned 90°
     if (!has_y) ey = vec2(-ex.y, ex.x);
     float k = u_footprint_scale * u_footprint_scale;
-    if (u_splat_mode == SPLAT_TRIANGLES && near_silhouette(view, tx, ty)) {
+    if (u_splat_mode == SPLAT_TRIANGLES && u_patches == 0 && near_silhouette(view, tx, ty)) {
         // Round, of the larger axis: the flux of rim slivers is spread across the
         // streaks their neighbours' slivers would leave, not along them.
         float r2 = max(dot(ex, ex), dot(ey, ey));
@@ -151,7 +161,7 @@ bool quad_shape_drawn(int view, int qx, int qy, vec2 c[4]) {
     float longest = max(max(length(e1), length(e3)),
                         max(length(c[2] - c[1]), length(c[2] - c[3])));
     float area = 0.5 * abs(a1 + a2);          // the quad's area (pixels^2)
-    if (longest > STRETCH_PX && longest * longest > STRETCH_RATIO * area
+    if (u_patches == 0 && longest > STRETCH_PX && longest * longest > STRETCH_RATIO * area
         && (near_silhouette(view, qx, qy) || near_silhouette(view, qx + 1, qy + 1)))
         return false;                         // a rim sliver (see RIM_STEPS)
     return a1 * a2 > 0.0;                     // same orientation, neither degenerate
@@ -167,7 +177,8 @@ float gaussian_share(int view, int tx, int ty) {
     for (int qy = ty - 1; qy <= ty; ++qy)
         for (int qx = tx - 1; qx <= tx; ++qx)
             if (qx >= 0 && qy >= 0 && qx < side && qy < side
-                && quad_flags[(view * side + qy) * side + qx] != 0) drawn += 1.0;
+                ? quad_flags[(view * side + qy) * side + qx] != 0 : u_patches == 1)
+                drawn += 1.0;
     return 1.0 - 0.25 * drawn;
 }
 

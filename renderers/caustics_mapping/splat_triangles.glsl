@@ -46,6 +46,10 @@ layout(std430, binding = 2) buffer QuadData { vec4 quad_data[]; };
 layout(std430, binding = 3) buffer QuadMeans { vec4 quad_means[]; };
 // record i: corner_data[3i] rgb e, [3i + 1] rgb lo_e, [3i + 2] rgb hi_e (W/m^2).
 layout(std430, binding = 4) buffer CornerData { vec4 corner_data[]; };
+// Per grid quad, 1 where its rim patch is drawn instead (rim_patches.glsl), read
+// with u_handoff = 1.
+layout(std430, binding = 8) readonly buffer Handoff { int handoff[]; };
+uniform int u_handoff;
 
 int quad_index(int view, int qx, int qy) {
     return (view * (u_grid - 1) + qy) * (u_grid - 1) + qx;
@@ -81,6 +85,10 @@ void main() {
     for (int m = 1; m < 4; ++m)
         drawn = drawn && abs(splat_records[record[m] * 5 + 3].w - receiver) <= 0.5;
     drawn = drawn && quad_shape_drawn(view, qx, qy, c);
+    // A quad left to its rim patch is not drawn here, and counts as drawn for its
+    // corners' Gaussians (quad_flags 2): the patch carries its flux.
+    bool patched = u_handoff == 1 && handoff[q] != 0;
+    drawn = drawn && !patched;
     vec2 areas = vec2(0.0);
     if (drawn) {
         vec3 p0 = splat_records[record[0] * 5 + 2].xyz, p1 = splat_records[record[1] * 5 + 2].xyz;
@@ -97,7 +105,7 @@ void main() {
     // Half the quad's flux (an eighth of each corner's) over each triangle's area.
     vec3 half_flux = vec3(0.0);
     for (int m = 0; m < 4; ++m) half_flux += 0.125 * splat_records[record[m] * 5 + 3].rgb;
-    quad_flags[q] = drawn ? 1 : 0;
+    quad_flags[q] = patched ? 2 : drawn ? 1 : 0;
     quad_data[q] = vec4(drawn ? 1.0 : 0.0, areas, 0.0);
     quad_means[2 * q] = vec4(areas.x > 0.0 ? half_flux / areas.x : vec3(0.0), 0.0);
     quad_means[2 * q + 1] = vec4(areas.y > 0.0 ? half_flux / areas.y : vec3(0.0), 0.0);

@@ -78,11 +78,15 @@ def test_strong_sphere_exit_surface_at_twice_the_grid_in_the_render(ctx):
 def test_every_splat_kernel_keeps_the_vertices_flux(ctx, name, splat):
     """Physical requirement: the receiver map's flux (planar floor: sum E * texel
     area) equals the flux of the vertices splatted onto it, to 1e-5. The bunny has
-    the long, thin footprints near its silhouette that once dropped a splat."""
+    the long, thin footprints near its silhouette that once dropped a splat. With
+    triangles the strong preset traces rim patches: a grid vertex then gives its
+    patched quads' quarters to them, and a patch vertex draws the quarters of its own
+    patch's quads (the shares the frame records; without patches all 1)."""
     frame = render_frame(_scene(name, preset="strong", splat=splat, grid=96), ctx=ctx)
-    hits = frame.hits
-    splatted = (hits["status"] == STATUS["hit"]) & (hits["receiver"] == 0)
-    expected = hits["flux"][splatted].astype(np.float64).sum(axis=0)
+    assert bool(frame.patches) == (splat == "triangles")
+    records = frame.traced_records()
+    splatted = (records["status"] == STATUS["hit"]) & (records["receiver"] == 0)
+    expected = records["flux"][splatted].sum(axis=0)
     assert splatted.sum() > 1000 and expected[0] > 0
     flux = frame.result.receivers[0].irradiance.astype(np.float64).reshape(-1, 3).sum(axis=0)
     flux *= frame.result.receivers[0].texel_area()

@@ -40,8 +40,9 @@ from .conftest import small_scene
 ])
 def test_hook_splats_the_methods_records_into_the_methods_maps(ctx, name, method, kernel):
     """Read back, split per light sample and channel, and splat through the hook, a
-    frame's records give that frame's receiver maps exactly."""
-    scene = method.configure(small_scene(REPO / "scenes" / f"{name}.toml",
+    frame's records give that frame's receiver maps exactly. The hook takes the
+    grid's records, so the frames here trace no rim patches (``rim_patches = 1``)."""
+    scene = method.configure(small_scene(REPO / "scenes" / f"{name}.toml", rim_patches=1,
                                          **({"splat": kernel} if kernel else {})))
     geometry = build_geometry(scene)
     frame = render_frame(scene, ctx=ctx, geometry=geometry)

@@ -59,14 +59,19 @@ def test_every_program_expands_without_include_lines():
 def test_shared_shader_maths_has_one_copy():
     """The estimators run by the caustic trace and the camera pass, and the Gaussian
     splat program of both splat passes, are the same included text, defined in one
-    file only."""
+    file only; so is the stream compaction of the Gaussians' rectangles and the rim
+    patches."""
     estimators = (PACKAGE / "estimators.glsl").read_text()
     for program in ("caustic_trace.glsl", "camera.glsl"):
         assert estimators in _expand(program), program
-    gaussians = (PACKAGE / "splat_gaussians.glsl").read_text()
+    gaussians = _expand("splat_gaussians.glsl")
     for program in ("caustic_splat.glsl", "receiver_splat.glsl"):
         assert gaussians in _expand(program), program
+    compact = (PACKAGE / "compact.glsl").read_text()
+    for program in ("caustic_splat.glsl", "rim_patches.glsl"):
+        assert compact in _expand(program), program
     definitions = {
+        "void compact(int n)": "compact.glsl",
         "int estimate_along(": "estimators.glsl",
         "float light_distance(": "common.glsl",
         "bool receiver_lookup(": "common.glsl",
