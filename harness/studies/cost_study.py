@@ -96,7 +96,7 @@ def sweep_configs(*, quick: bool, splat: str = "points") -> list[dict]:
     """Settings overrides of the sweep (a smaller set when ``quick``): estimators x
     iterations, grid, map sizes, and the splat width (``points``) or the other
     kernels (``footprint``, ``triangles``; the Gaussian kernels without rim patches,
-    which replace triangles)."""
+    which replace triangles) and, with triangles, the rim patches (none; 5 x 5)."""
     iterations = (0, 1, 3) if quick else (0, 1, 2, 3, 5, 8)
     grids = (32, 64, 128) if quick else (32, 64, 128, 256)
     maps = (256, 512) if quick else (256, 512, 1024)
@@ -110,6 +110,8 @@ def sweep_configs(*, quick: bool, splat: str = "points") -> list[dict]:
     else:
         configs += [{"splat": k} | ({} if k == "triangles" else {"rim_patches": 1})
                     for k in ("points", "footprint", "triangles") if k != splat]
+    if splat == "triangles":
+        configs += [{"rim_patches": n} for n in ((1,) if quick else (1, 5))]
     return configs
 
 
