@@ -250,8 +250,8 @@ def _read_records(state: FrameState, traces: list[Trace], rim: RimPatches | None
                   patches: list[Trace], *, light_index: int) -> None:
     """The traces' records into ``state.acc.hits`` (grid) and ``.patches`` (rim
     patches), each with its ``share`` (:func:`.rim_patches.grid_shares`,
-    :func:`.rim_patches.patch_shares`) and the patches' ``quad``; the traces go back
-    to the pool."""
+    :func:`.rim_patches.patch_shares`) and the patches' ``quad``; the grid's traces
+    go back to the pool (the patches' with the frame's other resources)."""
     setup, acc, s = state.setup, state.acc, state.scene.settings
     quads = rim.read_quads() if rim is not None else np.zeros(0, np.int32)
     for channel, trace in zip(setup.channels, traces, strict=False):

@@ -75,10 +75,10 @@ class Frame:
         ``origin``, ``direction``, ``receiver`` and ``flux`` (K, 3) W, each vertex's
         flux times its ``share``, so the splatted vertices' flux is what the maps
         received."""
-        return traced_records(self.hits, self.patches)
+        return _traced_records(self.hits, self.patches)
 
 
-def traced_records(hits: dict[str, np.ndarray],
+def _traced_records(hits: dict[str, np.ndarray],
                    patches: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """:meth:`Frame.traced_records` of a frame's ``hits`` and ``patches``."""
     parts = [hits] + ([patches] if patches and len(patches["status"]) else [])
@@ -166,7 +166,7 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
 
     merged = _merge(acc.hits, s.iterations)
     patches = _merge(acc.patches, s.iterations) if acc.patches else {}
-    metadata = _metadata(state, merged=merged, records=traced_records(merged, patches),
+    metadata = _metadata(state, merged=merged, records=_traced_records(merged, patches),
                          lights=lights)
     result = RenderResult(
         renderer="caustics_mapping", camera=acc.camera,
