@@ -50,6 +50,9 @@ def write_outputs(frame: Frame, directory: str | Path) -> list[Path]:
         paths.append(out / "patches.npz")
         with open(paths[-1], "wb") as f:
             np.savez_compressed(f, **frame.patches, status_codes=np.array(list(STATUS)))
+    else:
+        # An earlier render's patches must not pass for this one's.
+        (out / "patches.npz").unlink(missing_ok=True)
     summary = {
         "renderer": result.renderer,
         "receiver_extent": [list(r.extent) for r in result.receivers],

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import moderngl
 
-from renderers.caustics_mapping.context import ResourcePool, load_program, pool
+from renderers.caustics_mapping.context import GLError, ResourcePool, load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.meshes import GpuMesh
 from renderers.caustics_mapping.uniforms import set_light_uniforms
@@ -64,8 +64,21 @@ def render_object_surfaces(
         test ``>``): the layer behind the front one where a ray meets the objects
         twice (a ring's far wall behind its near wall, a bowl's inside behind its
         rim).
+
+    Raises
+    ------
+    GLError
+        The atlas (``grid`` texels per view, the views side by side) would be wider
+        than the context's ``GL_MAX_TEXTURE_SIZE``.
     """
     views = light.object_views
+    limit = int(ctx.info["GL_MAX_TEXTURE_SIZE"])
+    if len(views) * grid > limit:
+        raise GLError(f"the object atlas would be {len(views)} views x {grid} = "
+                      f"{len(views) * grid} texels wide, past this GL's "
+                      f"GL_MAX_TEXTURE_SIZE of {limit}: lower settings.grid (or "
+                      "rim_patches, whose front atlas has that many texels per grid "
+                      "step, or back_resolution)")
     resources = pool(ctx)
     textures = [resources.texture((len(views) * grid, grid)) for _ in range(2)]
     depth = resources.depth_texture((len(views) * grid, grid))

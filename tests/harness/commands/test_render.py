@@ -33,3 +33,20 @@ def test_render_writes_outputs(tmp_path, capsys):
     assert hits["history"].shape == (32 * 32, 3)
     for key in ("origin", "direction", "status"):
         assert len(hits[key]) == 32 * 32
+
+
+def test_render_writes_the_rim_patches_of_its_own_frame(tmp_path):
+    """The strong preset's rim patches go to patches.npz (one grid quad per patch of
+    4 x 4 vertices, a share per vertex); a render without patches into the same
+    folder removes it, so no earlier render's patches pass for its own."""
+    scene = ROOT / "scenes" / "glass_sphere.toml"
+    out = tmp_path / "out"
+    small = ["--grid", "32", "--caustic-map", "128", "--preset", "strong"]
+    assert main(["render", str(scene), "-o", str(out), *small]) == 0
+    patches = np.load(out / "patches.npz")
+    assert len(patches["status"]) == 16 * len(np.unique(patches["quad"])) > 0
+    assert patches["share"].max() == 1.0 and patches["share"].min() == 0.25
+    assert main(["render", str(scene), "-o", str(out), *small,
+                 "--set", "rim_patches=1"]) == 0
+    assert not (out / "patches.npz").exists()
+    assert (out / "hits.npz").exists()

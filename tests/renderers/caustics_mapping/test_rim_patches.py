@@ -12,6 +12,7 @@ import pytest
 from harness.checks.stability import incident_flux_bound
 from renderers.caustics_mapping import render_frame
 from renderers.caustics_mapping.caustic_trace import STATUS
+from renderers.caustics_mapping.context import GLError
 from scenes import load_scene, with_settings
 from scenes.geometry import build_geometry
 from scenes.schema import SceneError
@@ -103,3 +104,13 @@ def test_patches_refuse_what_they_cannot_replace(settings, field):
     texel centres), the paper's Eq. 6 flux, a kernel other than triangles."""
     with pytest.raises(SceneError, match=f"rim_patches.*{field}"):
         with_settings(load_scene(ROOT / "scenes" / "glass_sphere.toml"), settings)
+
+
+def test_an_atlas_past_the_texture_limit_is_refused_by_name(ctx):
+    """A front atlas of grid x rim_patches texels per view wider than the context's
+    GL_MAX_TEXTURE_SIZE (16,384 on llvmpipe; grid 4096 x 5 = 20,480) is an error that
+    names the limit and the settings, not a GL error after the draw."""
+    scene = small_scene(ROOT / "scenes" / "glass_sphere.toml", preset="strong", grid=4096,
+                        rim_patches=5)
+    with pytest.raises(GLError, match=r"GL_MAX_TEXTURE_SIZE.*rim_patches"):
+        render_frame(scene, ctx=ctx, lookups=False)
