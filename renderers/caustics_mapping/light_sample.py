@@ -254,16 +254,19 @@ def _read_records(state: FrameState, traces: list[Trace], rim: RimPatches | None
     go back to the pool (the patches' with the frame's other resources)."""
     setup, acc, s = state.setup, state.acc, state.scene.settings
     quads = rim.read_quads() if rim is not None else np.zeros(0, np.int32)
+    # Every channel's grid has the same views and patches: one share per vertex.
+    shares = grid_shares(quads, views=traces[0].count // s.grid**2, grid=s.grid) \
+        if traces else None
     for channel, trace in zip(setup.channels, traces, strict=False):
         data = trace.read()
-        data["share"] = grid_shares(quads, views=trace.count // s.grid**2, grid=s.grid)
+        data["share"] = shares
         data["channel"] = np.full(trace.count, channel, np.int32)
         data["light"] = np.full(trace.count, light_index, np.int32)
         acc.hits.append(data)
         trace.give_back(pool(state.ctx))
+    side = (s.rim_patches + 1) ** 2
     for channel, trace in zip(setup.channels, patches, strict=False):
         data = trace.read()
-        side = (s.rim_patches + 1) ** 2
         data["quad"] = np.repeat(quads, side)
         data["share"] = np.tile(patch_shares(s.rim_patches), len(quads))
         data["channel"] = np.full(trace.count, channel, np.int32)
@@ -335,7 +338,7 @@ def _trace_objects(state: FrameState, light: LightSetup, *, positions):
         # The quads near the silhouette, from the first trace (which vertices show an
         # object does not depend on the channel), traced again as patches.
         with timer.measure("rim_patches"):
-            rim = find_rim_patches(ctx, traces[0], grid=s.grid, factor=stride)
+            rim = find_rim_patches(ctx, traces[0], grid=s.grid)
             for channel, coarse in zip(setup.channels, traces, strict=True):
                 coarse.handoff = rim.handoff
                 if rim.count:

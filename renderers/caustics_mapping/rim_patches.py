@@ -35,14 +35,11 @@ class RimPatches:
         int32 grid-quad index of patch k, for k < ``count``, in increasing order.
     count : int
         Patches.
-    factor : int
-        Quads per patch side (``settings.rim_patches``).
     """
 
     handoff: moderngl.Buffer
     quads: moderngl.Buffer
     count: int
-    factor: int
 
     def give_back(self, resources: ResourcePool) -> None:
         """Return the buffers to the context's pool."""
@@ -78,10 +75,9 @@ def patch_shares(factor: int) -> np.ndarray:
     return (0.25 * np.outer(edge, edge)).astype(np.float32).reshape(-1)
 
 
-def find_rim_patches(ctx: moderngl.Context, trace: Trace, *, grid: int,
-                     factor: int) -> RimPatches:
+def find_rim_patches(ctx: moderngl.Context, trace: Trace, *, grid: int) -> RimPatches:
     """The quads of ``trace`` (a grid of ``grid`` x ``grid`` vertices per view) that
-    get patches of ``factor`` x ``factor`` quads."""
+    get rim patches."""
     views = trace.count // (grid * grid)
     quads = views * (grid - 1) ** 2
     resources = pool(ctx)
@@ -100,4 +96,4 @@ def find_rim_patches(ctx: moderngl.Context, trace: Trace, *, grid: int,
         ctx.memory_barrier()
     found = int(np.frombuffer(count.read(), np.int32)[0])
     resources.give_back(count)
-    return RimPatches(handoff, listed, found, factor)
+    return RimPatches(handoff, listed, found)
