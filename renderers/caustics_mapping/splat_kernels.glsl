@@ -245,10 +245,11 @@ float fit_radius(inout mat2 cov, float cut, float max_radius) {
 // by Green's theorem their sums over a triangle's edges (anticlockwise) are the area
 // and the first moments (x, y) of its part inside the box [lo, hi] (d/dx of
 // clamp(x, lo.x, hi.x) is 1 within the box's x-range and 0 outside it, and the
-// strip's borders have dy = 0). Exact: on
-// each of the pieces where x is below lo.x, within the box and above hi.x the
-// integrands are polynomials of degree at most 2 in the segment's parameter,
-// integrated by Simpson's rule.
+// strip's borders have dy = 0). Exact: the segment's parameters where x crosses
+// lo.x and hi.x cut it into at most three pieces on each of which X = clamp(x) and y
+// are linear in the parameter, so with the values X0, X1 and Y0, Y1 at a piece's
+// ends (length h) the integrals are h (X0 + X1) / 2, h (X0^2 + X0 X1 + X1^2) / 6
+// and h (2 X0 Y0 + X0 Y1 + X1 Y0 + 2 X1 Y1) / 6, times dy.
 vec3 edge_moments(vec2 p, vec2 q, vec2 lo, vec2 hi) {
     float dy = q.y - p.y;
     if (dy == 0.0) return vec3(0.0);
@@ -257,19 +258,13 @@ vec3 edge_moments(vec2 p, vec2 q, vec2 lo, vec2 hi) {
     if (tb <= ta) return vec3(0.0);
     float dx = q.x - p.x;
     float s0 = dx != 0.0 ? (lo.x - p.x) / dx : ta, s1 = dx != 0.0 ? (hi.x - p.x) / dx : ta;
-    float cut[4] = float[4](ta, clamp(min(s0, s1), ta, tb), clamp(max(s0, s1), ta, tb), tb);
-    vec3 total = vec3(0.0);
-    for (int k = 0; k < 3; ++k) {
-        float h = cut[k + 1] - cut[k];
-        if (h <= 0.0) continue;
-        vec3 piece = vec3(0.0);
-        for (int j = 0; j < 3; ++j) {
-            float t = cut[k] + 0.5 * float(j) * h;
-            float x = clamp(p.x + t * dx, lo.x, hi.x), y = p.y + t * dy;
-            piece += (j == 1 ? 4.0 : 1.0) * vec3(x, 0.5 * x * x, y * x);
-        }
-        total += piece * (h / 6.0);
-    }
+    vec4 t = vec4(ta, clamp(min(s0, s1), ta, tb), clamp(max(s0, s1), ta, tb), tb);
+    vec4 x = clamp(p.x + t * dx, lo.x, hi.x), y = p.y + t * dy;
+    vec3 h = t.yzw - t.xyz;
+    vec3 x0 = x.xyz, x1 = x.yzw, y0 = y.xyz, y1 = y.yzw;
+    vec3 total = vec3(dot(h, x0 + x1) * 0.5,
+                      dot(h, x0 * x0 + x0 * x1 + x1 * x1) / 6.0,
+                      dot(h, 2.0 * x0 * y0 + x0 * y1 + x1 * y0 + 2.0 * x1 * y1) / 6.0);
     return dy * total;
 }
 
@@ -279,7 +274,10 @@ vec3 edge_moments(vec2 p, vec2 q, vec2 lo, vec2 hi) {
 // minus both). A linear function with values fa, fb, fc at the corners integrates to
 // fa (area - lambda.x - lambda.y) + fb lambda.x + fc lambda.y over the pixel, so the
 // pixels' integrals sum to the triangle's, its area times (fa + fb + fc) / 3.
-float pixel_integrals(vec2 a, vec2 b, vec2 c, out vec2 lambda) {
+// `diagonal`: the edge a -> c's edge_moments relative to a, or (known = false)
+// computed here where needed: the two triangles of a quad share its diagonal.
+float pixel_integrals(vec2 a, vec2 b, vec2 c, inout vec3 diagonal, inout bool known,
+                           out vec2 lambda) {
     lambda = vec2(0.0);
     vec2 u = b - a, w = c - a;
     float d = u.x * w.y - u.y * w.x;            // twice the signed area
@@ -310,9 +308,12 @@ float pixel_integrals(vec2 a, vec2 b, vec2 c, out vec2 lambda) {
             // Relative to a, so the integrals scale with the triangle, not with its
             // place in the pixel (tiny triangles at a focus keep their precision).
             vec2 box_lo = -a, box_hi = vec2(1.0) - a;
+            if (!known) {
+                diagonal = edge_moments(vec2(0.0), w, box_lo, box_hi);
+                known = true;
+            }
             vec3 m = orientation * (edge_moments(vec2(0.0), u, box_lo, box_hi)
-                                    + edge_moments(u, w, box_lo, box_hi)
-                                    + edge_moments(w, vec2(0.0), box_lo, box_hi));
+                                    + edge_moments(u, w, box_lo, box_hi) - diagonal);
             area = m.x;
             if (!(area > 0.0)) return 0.0;
             moment = m.yz;

@@ -295,8 +295,13 @@ void main() {
     vec3 value = vec3(0.0);
     float covered = 0.0;
     vec2 lambda;
+    // The diagonal (c0, c2) is an edge of both triangles: its integrals are found
+    // once; the second triangle is read as (c0, c3, c2), so
+    // lambda holds c3's integral first.
+    vec3 diagonal = vec3(0.0);
+    bool known = false;
     if (g_drawn.x > 0.5) {
-        float part = pixel_integrals(c0, g_c1 - rel, c2, lambda);
+        float part = pixel_integrals(c0, g_c1 - rel, c2, diagonal, known, lambda);
         if (part > 0.0) {
             value += g_first[0] * (part - lambda.x - lambda.y) + g_first[1] * lambda.x
                 + g_first[2] * lambda.y;
@@ -304,10 +309,10 @@ void main() {
         }
     }
     if (g_drawn.y > 0.5) {
-        float part = pixel_integrals(c0, c2, g_c3 - rel, lambda);
+        float part = pixel_integrals(c0, g_c3 - rel, c2, diagonal, known, lambda);
         if (part > 0.0) {
-            value += g_second[0] * (part - lambda.x - lambda.y) + g_second[1] * lambda.x
-                + g_second[2] * lambda.y;
+            value += g_second[0] * (part - lambda.x - lambda.y) + g_second[1] * lambda.y
+                + g_second[2] * lambda.x;
             covered += part;
         }
     }
