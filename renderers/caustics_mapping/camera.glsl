@@ -198,6 +198,12 @@ bool surface_at(int surface, vec3 x, out vec4 t) {
     return surface == SURFACE_BACK ? back_at(x, t, n) : receiver_seen(x, t, n);
 }
 
+// One pixel of the back-face image, or one positions-atlas texel, at x (m).
+float surface_texel(int surface, vec3 x) {
+    return surface == SURFACE_BACK ? u_pixel_width * length(x - u_eye)
+                                   : map_texel_width(x, u_positions_size);
+}
+
 float projection_distance(int surface, vec3 x) {
     return surface == SURFACE_BACK ? length(x - u_eye) : light_distance(x);
 }

@@ -161,6 +161,7 @@ def _set_object(program: moderngl.Program, camera: Camera, inputs: CameraInputs,
         ("u_iterations", o.iterations), ("u_eps", float(o.eps)),
         ("u_start", int(o.start == "fixed")),
         ("u_start_distance", float(o.start_distance)), ("u_verify", int(o.verify)),
+        ("u_converged", float(o.converged)),
         ("u_hit_tolerance", float(o.hit_tolerance or 0.0)),
     ):
         set_uniform(program, name, value)

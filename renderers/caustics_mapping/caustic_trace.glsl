@@ -198,7 +198,7 @@ void estimate_record(int record, int k, float d) {
 // The estimators stop once |h| is at most u_converged positions-map texels at the
 // estimate (estimators.glsl; 0: only at h = 0).
 uniform float u_converged;
-#define ESTIMATE_TOLERANCE(x) (u_converged * map_texel_width(x, u_positions_size))
+#define ESTIMATE_TOLERANCE(surface, x) (u_converged * map_texel_width(x, u_positions_size))
 
 #include "estimators.glsl"
 

@@ -34,8 +34,9 @@
 // Unsafeguarded, a non-finite update ends the iterations as STATUS_DIVERGED; a lookup
 // that sees no surface ends them as STATUS_LOST. The estimate is then kept, and
 // recorded again for each remaining update.
-// Converged: an estimate whose residual |h(d)| is at most ESTIMATE_TOLERANCE(P(d))
-// (m; the includer may define it before including this file, default 0: only h = 0)
+// Converged: an estimate whose residual |h(d)| is at most
+// ESTIMATE_TOLERANCE(surface, P(d)) (m; the includer may define it before including
+// this file, default 0: only h = 0)
 // ends the iterations and is kept. Once |h| is at the lookups' resolution (float32
 // rounding and the bilinear reads' error), h's sign and the secant's slope are noise:
 // on metal_ring's reflected rays d_1 = g(0) is already the root (a vertical mirror
@@ -45,7 +46,7 @@
 // unconverged after 5 updates).
 
 #ifndef ESTIMATE_TOLERANCE
-#define ESTIMATE_TOLERANCE(x) 0.0
+#define ESTIMATE_TOLERANCE(surface, x) 0.0
 #endif
 
 uniform int u_iterations;       // updates after d_1
@@ -112,7 +113,7 @@ int estimate_along(int surface, vec3 v, vec3 r, float start, int estimator, bool
         }
         d_seen = d;
         float h = g - d;
-        if (abs(h) <= ESTIMATE_TOLERANCE(v + d * r)) break;   // converged: d is kept
+        if (abs(h) <= ESTIMATE_TOLERANCE(surface, v + d * r)) break;   // converged: kept
         if (h >= 0.0) {
             if (d >= lo) { lo = d; h_lo = h; lo_known = true; }
         } else if (hi < 0.0 || d <= hi) {

@@ -4,15 +4,21 @@
 // including this file,
 //   bool surface_at(int surface, vec3 x, out vec4 t)
 //   float projection_distance(int surface, vec3 x)
+//   float surface_texel(int surface, vec3 x)
 // : the point T(x) of surface `surface` seen through x's projection into that
 // surface's image (t.xyz, m), false where the image shows none there; and the
 // distance (m) of x from that image's centre of projection along its projection
 // ray (the light's distance, or the depth along a directional light; the eye's
-// distance). It defines ESTIMATOR (0 modified, 1 newton, 2 secant) and SAFEGUARDED
+// distance); and the width (m) at x of one texel of that surface's image. As in the
+// caustic trace, the estimators stop at an estimate within u_converged of those
+// texels of the surface (0: only on it). It defines ESTIMATOR (0 modified, 1 newton, 2 secant) and SAFEGUARDED
 // (0 or 1) at compile time (as uniforms, on llvmpipe, every variant's code ran
 // masked: 1.5x the time).
 
 void estimate_record(int record, int k, float d) {}   // no history here
+
+uniform float u_converged;
+#define ESTIMATE_TOLERANCE(surface, x) (u_converged * surface_texel(surface, x))
 
 #include "estimators.glsl"
 
@@ -37,7 +43,11 @@ void estimate_record(int record, int k, float d) {}   // no history here
 // 2. Refine, u_iterations lookups: the secant point of the bracket with the
 //    Illinois rule (an end kept twice in a row has its s halved: regula falsi
 //    without its one-sided stall); while one end's s is unknown, the secant through
-//    the last two points in front if it falls inside, else bisection.
+//    the last two points in front if it falls inside, else bisection. A point whose
+//    |s| is within ESTIMATE_TOLERANCE (a hundredth of a texel with the safeguard)
+//    lies on the surface to the lookups' resolution: it is the estimate, and the
+//    iterations end (strong on bunny: camera excess relMSE 3.975e-3 -> 3.980e-3,
+//    its 95 % interval +-7e-5; the object's shading 56 -> 51 ms on llvmpipe).
 // The estimate is the final bracket's secant point, or its upper end where the
 // lower end's s is unknown; STATUS_LOST where no point behind was found.
 
@@ -98,6 +108,10 @@ int bracket_on(int surface, vec3 v, vec3 r, float start, out float d_out) {
         }
         float sc;
         bool ok = surface_s(surface, v, r, c, sc);
+        if (ok && abs(sc) <= ESTIMATE_TOLERANCE(surface, v + c * r)) {
+            d_out = c;
+            return STATUS_HIT;
+        }
         if (ok && sc >= 0.0) {
             b = c;
             sb = sc;
