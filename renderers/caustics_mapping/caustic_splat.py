@@ -70,12 +70,14 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
     map's faces).
     """
     gaussians = load_program(ctx, name)
-    # Each record's Gaussian is set up by a compute pass, then drawn as a sprite or,
-    # listed by a second pass, as a rectangle (splat_gaussians.glsl).
+    # The records that have a Gaussian are listed (flags, then a one-group scan), set
+    # up by a compute pass over that list, and drawn as sprites or, listed again, as
+    # rectangles (splat_gaussians.glsl).
     setup = load_program(ctx, name, compute=True)
-    compact = load_program(ctx, name, defines={"COMPACT": 1}, compute=True)
+    flags, listing, compact = (load_program(ctx, name, defines={stage: 1}, compute=True)
+                               for stage in ("FLAGS", "LIST", "COMPACT"))
     boxed = load_program(ctx, name, defines={"BOXED": 1})
-    programs = [gaussians, setup, compact, boxed]
+    programs = [gaussians, setup, flags, listing, compact, boxed]
     stages = ()
     if options.mode == "triangles":
         # The quads' and the corners' data first (compute), then the triangles.
@@ -109,10 +111,12 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
             # quad_flags, quad_data, quad_means, corner_data (splat_triangles.glsl)
             buffers = tuple(resources.buffer(n) for n in
                             (4 * quads, 16 * quads, 32 * quads, 48 * trace.count))
-        # Three vec4 per record, the boxed records' list and their draw command
-        # (splat_gaussians.glsl, bindings 5 to 7).
+        # Three vec4 per record, the boxed records' list and their draw command, the
+        # records' flags, their list, its dispatch and the sprites' draw command
+        # (splat_gaussians.glsl, bindings 5 to 7 and 9 to 12).
         splats = (resources.buffer(48 * trace.count), resources.buffer(4 * trace.count),
-                  resources.buffer(16))
+                  resources.buffer(16), resources.buffer(4 * trace.count),
+                  resources.buffer(4 * trace.count), resources.buffer(16), resources.buffer(16))
         arrays.append((trace, (ctx.vertex_array(gaussians, []), ctx.vertex_array(boxed, [])),
                        quads, triangles, buffers, splats))
     for k in range(passes):
@@ -138,13 +142,19 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
                     stage.run(group_x=-(-count // 64))
                     ctx.memory_barrier()
                 triangles.render(moderngl.POINTS, vertices=quads)
-            for binding, buffer in enumerate(splats, start=5):
+            for binding, buffer in zip((5, 6, 7, 9, 10, 11, 12), splats, strict=True):
                 buffer.bind_to_storage_buffer(binding)
-            for program, groups in ((setup, -(-trace.count // 64)), (compact, 1)):
+            for program in (flags, listing):
                 set_uniform(program, "u_count", trace.count)
-                program.run(group_x=groups)
-                ctx.memory_barrier()
-            points[0].render(moderngl.POINTS, vertices=trace.count)
+            flags.run(group_x=-(-trace.count // 64))
+            ctx.memory_barrier()
+            listing.run(group_x=1)
+            ctx.memory_barrier()
+            setup.run_indirect(splats[5])
+            ctx.memory_barrier()
+            compact.run(group_x=1)
+            ctx.memory_barrier()
+            points[0].render_indirect(splats[6], moderngl.POINTS, count=1)
             points[1].render_indirect(splats[2], moderngl.TRIANGLE_STRIP, count=1)
     ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
     for _, points, _, triangles, buffers, splats in arrays:

@@ -1,8 +1,8 @@
 // The Gaussians program of a splat pass (splat_kernels.glsl: kernels `points` and
 // `footprint`, and the quarters `triangles` cannot draw), included by
 // caustic_splat.glsl and receiver_splat.glsl when TRIANGLES is not defined: a
-// compute pass sets up one Gaussian per trace record, then one vertex per record
-// draws it as a square point sprite over every target pixel the Gaussian's cut-off
+// compute pass sets up one Gaussian per trace record that has one, then one vertex
+// per such record draws it as a square point sprite over every target pixel the Gaussian's cut-off
 // ellipse reaches, or, where the ellipse is long or leaning, as a rectangle along
 // its axes (cutoff_box). With c the hit in target pixels, S the
 // covariance (target pixels^2) and q = x - c for a pixel centre x, the pixel gets
@@ -11,6 +11,15 @@
 // norm is the sum of w over the splat's pixels on the target (gaussian_norm), so the
 // weights sum to one and the vertex's flux share is kept; A (m^2) is the receiver
 // area of one target pixel at the hit, so rgb is irradiance (W/m^2).
+// The set-up runs in four compute passes: FLAGS marks the records that have a
+// Gaussian to draw (a hit on the target and a share left by the triangles), LIST
+// lists them in record order (compact.glsl), the set-up proper runs over that list
+// only, and COMPACT lists the listed ones drawn as rectangles. Listed first, the
+// set-up's loops (its covariance's neighbours, the norm's pixels) run on a dense
+// list instead of on one lane in eight (llvmpipe runs eight invocations in step;
+// glass_sphere's grid has a Gaussian at 471 of its 16384 vertices), and the sprites'
+// draw shades only the listed vertices; the same Gaussians blend in the same order,
+// so the maps are the same bit for bit.
 // The including pass defines, before including this file,
 //   vec4 target_position(vec2 pix)     target pixels -> clip position
 //   mat2 gaussian_covariance(int view, int tx, int ty, vec3 hit, vec3 normal, inout vec2 c)
@@ -38,6 +47,13 @@ layout(std430, binding = 5) buffer GaussianSplats { vec4 gaussians[]; };
 // and the indirect draw of them: 4 vertices (a strip) times their count.
 layout(std430, binding = 6) buffer GaussianBoxes { int gaussian_boxes[]; };
 layout(std430, binding = 7) buffer BoxesDraw { int boxes_draw[4]; };
+// Per record, 1 where it has a Gaussian to set up (FLAGS); the listed records in
+// record order (LIST); the set-up's dispatch over them (groups x, y, z and their
+// count) and the sprites' draw of them (vertices, instances, first, base instance).
+layout(std430, binding = 9) buffer GaussianFlags { int gaussian_flags[]; };
+layout(std430, binding = 10) buffer GaussianList { int gaussian_list[]; };
+layout(std430, binding = 11) buffer ListDispatch { uint list_dispatch[4]; };
+layout(std430, binding = 12) buffer SpritesDraw { uint sprites_draw[4]; };
 
 const int DRAWN_SPRITE = 1;
 const int DRAWN_BOX = 2;
@@ -62,22 +78,35 @@ void cutoff_box(mat2 m, float cut, out vec2 u, out vec2 w) {
 #endif
 
 #if defined COMPUTE_SHADER
-#if !defined COMPACT
+#if defined LIST || defined COMPACT
+layout(local_size_x = 1024) in;
+#include "compact.glsl"
+#else
 layout(local_size_x = 64) in;
 #endif
 uniform int u_count;            // records (invocations past it do nothing)
-// The Gaussian of record i: false where it draws nothing (not splatted here, no
-// share left by the triangles, or no pixel within its cut-off).
-bool gaussian_setup(int i, out vec2 c, out mat2 inv, out vec3 value, out float size) {
-    c = vec2(0.0);
-    inv = mat2(1.0);
-    value = vec3(0.0);
-    size = 0.0;
+
+// Whether record i has a Gaussian to draw: its hit in target pixels c, its share
+// of the vertex's flux (the quarters of its quads the triangles do not draw).
+bool gaussian_wanted(int i, out vec2 c, out float share) {
+    share = 0.0;
     if (!to_target(i, c)) return false;
     int view, tx, ty;
     record_vertex(i, view, tx, ty);
-    float share = gaussian_share(view, tx, ty);
-    if (share <= 0.0) return false;
+    share = gaussian_share(view, tx, ty);
+    return share > 0.0;
+}
+
+// The Gaussian of record i: false where it draws nothing (not splatted here, no
+// share left by the triangles, or no pixel within its cut-off).
+bool gaussian_setup(int i, out vec2 c, out mat2 inv, out vec3 value, out float size) {
+    inv = mat2(1.0);
+    value = vec3(0.0);
+    size = 0.0;
+    float share;
+    if (!gaussian_wanted(i, c, share)) return false;
+    int view, tx, ty;
+    record_vertex(i, view, tx, ty);
     vec3 hit = splat_records[i * 5 + 2].xyz;
     vec3 normal = splat_records[i * 5 + 4].xyz;
     mat2 cov = gaussian_covariance(view, tx, ty, hit, normal, c);
@@ -107,21 +136,36 @@ int drawn_as(mat2 inv, float size) {
     return box <= 0.5 * sprite && sprite - box >= BOX_SAVING ? DRAWN_BOX : DRAWN_SPRITE;
 }
 
-#if defined COMPACT
-// The boxed records in record order (compact.glsl), so the rectangles blend in the
-// same order on every run.
-layout(local_size_x = 1024) in;
-#include "compact.glsl"
-
-bool compact_listed(int i) { return int(gaussians[i * 3].w + 0.5) == DRAWN_BOX; }
-void compact_store(int slot, int i) { gaussian_boxes[slot] = i; }
-void compact_total(int count) { boxes_draw = int[4](4, count, 0, 0); }
-
-void main() { compact(u_count); }
-#else
+#if defined FLAGS
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_count) return;
+    vec2 c;
+    float share;
+    gaussian_flags[i] = gaussian_wanted(i, c, share) ? 1 : 0;
+}
+#elif defined LIST
+bool compact_listed(int i) { return gaussian_flags[i] != 0; }
+void compact_store(int slot, int i) { gaussian_list[slot] = i; }
+void compact_total(int count) {
+    list_dispatch = uint[4](uint((count + 63) / 64), 1u, 1u, uint(count));
+    sprites_draw = uint[4](uint(count), 1u, 0u, 0u);
+}
+
+void main() { compact(u_count); }
+#elif defined COMPACT
+// The listed records drawn as rectangles, in record order (compact.glsl), so the
+// rectangles blend in the same order on every run.
+bool compact_listed(int slot) { return int(gaussians[gaussian_list[slot] * 3].w + 0.5) == DRAWN_BOX; }
+void compact_store(int slot, int listed) { gaussian_boxes[slot] = gaussian_list[listed]; }
+void compact_total(int count) { boxes_draw = int[4](4, count, 0, 0); }
+
+void main() { compact(int(list_dispatch[3])); }
+#else
+void main() {
+    int slot = int(gl_GlobalInvocationID.x);
+    if (slot >= int(list_dispatch[3])) return;
+    int i = gaussian_list[slot];
     vec2 c;
     mat2 inv;
     vec3 value;
@@ -153,10 +197,12 @@ void main() {
     gl_Position = target_position(corner);
 }
 #else
+// Vertex k: the k-th listed record.
 void main() {
-    vec4 head = gaussians[gl_VertexID * 3];
-    vec4 inv = gaussians[gl_VertexID * 3 + 1];
-    v_value = gaussians[gl_VertexID * 3 + 2].rgb;
+    int i = gaussian_list[gl_VertexID];
+    vec4 head = gaussians[i * 3];
+    vec4 inv = gaussians[i * 3 + 1];
+    v_value = gaussians[i * 3 + 2].rgb;
     v_center = head.xy;
     v_inverse = mat2(inv.xy, inv.zw);
     gl_PointSize = max(head.z, 1.0);
