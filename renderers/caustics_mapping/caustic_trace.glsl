@@ -45,6 +45,10 @@
 layout(std430, binding = 0) writeonly buffer Records { vec4 records[]; };
 layout(std430, binding = 1) writeonly buffer History { float history[]; };
 layout(std430, binding = 2) readonly buffer RimPatches { int patch_quads[]; };
+// With u_patches: the patch vertices traced here (each shared vertex once, in its
+// owner's patch; rim_patches.glsl) and their number (entry 3).
+layout(std430, binding = 3) readonly buffer UniqueSlots { int unique_slots[]; };
+layout(std430, binding = 4) readonly buffer UniqueDispatch { uint unique_dispatch[4]; };
 
 uniform sampler2D u_receiver_positions;   // map atlas, RGBA32F (see common.glsl)
 uniform sampler2D u_receiver_normals;
@@ -428,7 +432,12 @@ void write_record(int base, vec3 v, float view, vec3 r, float d, vec3 p, int sta
 void main() {
 #if defined COMPUTE_SHADER
     int id = int(gl_GlobalInvocationID.x);
-    if (id >= u_count) return;
+    if (u_patches == 1) {
+        if (id >= int(unique_dispatch[3])) return;
+        id = unique_slots[id];
+    } else if (id >= u_count) {
+        return;
+    }
 #else
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);    // clipped: this pass rasterises nothing
     gl_PointSize = 1.0;

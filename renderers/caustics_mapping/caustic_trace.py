@@ -243,7 +243,7 @@ def run_caustic_trace(
     iterations = options.iterations
     count = len(light.object_views) * grid * grid
     if patches is not None:
-        count = patches.count * (front_stride + 1) ** 2
+        count = patches.vertices
     resources = pool(ctx)
     records = resources.buffer(count * RECORD_FLOATS * 4)        # every record is written
     history = resources.buffer(count * (iterations + 1) * 4)     # every entry is written
@@ -291,10 +291,16 @@ def run_caustic_trace(
         set_uniform(program, name, value)
     records.bind_to_storage_buffer(0)
     history.bind_to_storage_buffer(1)
-    if patches is not None:
-        patches.quads.bind_to_storage_buffer(2)
-    program.run((count + 63) // 64)
+    if patches is None:
+        program.run((count + 63) // 64)
+        ctx.memory_barrier()
+        return Trace(records, history, count, iterations)
+    # The patches' vertices that their owners trace (rim_patches.glsl), then the
+    # copies of them the neighbouring patches hold.
+    for binding, buffer in ((2, patches.quads), (3, patches.unique), (4, patches.dispatch)):
+        buffer.bind_to_storage_buffer(binding)
+    program.run_indirect(patches.dispatch)
     ctx.memory_barrier()
-    if patches is not None:
-        return Trace(records, history, count, iterations, grid=front_stride + 1, patches=True)
-    return Trace(records, history, count, iterations)
+    trace = Trace(records, history, count, iterations, grid=front_stride + 1, patches=True)
+    patches.copy_shared(ctx, trace)
+    return trace

@@ -338,7 +338,7 @@ def _trace_objects(state: FrameState, light: LightSetup, *, positions):
         # The quads near the silhouette, from the first trace (which vertices show an
         # object does not depend on the channel), traced again as patches.
         with timer.measure("rim_patches"):
-            rim = find_rim_patches(ctx, traces[0], grid=s.grid)
+            rim = find_rim_patches(ctx, traces[0], grid=s.grid, factor=stride)
             for channel, coarse in zip(setup.channels, traces, strict=True):
                 coarse.handoff = rim.handoff
                 if rim.count:

@@ -10,16 +10,40 @@
 // BAND (one invocation per quad): handoff[q] = 1 for a patched quad, else 0; the
 // splat passes leave patched quads to their patches (splat_triangles.glsl).
 // LIST (one work group): the patched quads in increasing order (patch_quads) and
-// their number (patch_count[0]), which the renderer reads back.
+// their number (patch_count[0]), which the renderer reads back; a patched quad's
+// handoff becomes its patch's index + 1.
+//
+// Neighbouring patches share the vertices of their common edges (a third of all
+// patch vertices on glass_sphere and bunny), which the trace would trace twice to
+// the same record. Each is traced once, in its owner: of the patched quads that
+// have it as a corner, the one of lowest index.
+// OWNED (one invocation per patch vertex, record order): owner[s], the record of
+// vertex s in its owner's patch (s itself where it owns it).
+// UNIQUE (one work group): the owned records in increasing order (unique_slots), and
+// the trace's dispatch over them (groups x, y, z, and their count).
+// COPY (one invocation per patch vertex): a record not owned, and its history, copied
+// from its owner's after the trace.
 #include "common.glsl"
 
+#if defined COPY
+layout(std430, binding = 0) buffer Records { vec4 records[]; };
+layout(std430, binding = 7) buffer History { float history[]; };
+#else
 layout(std430, binding = 0) readonly buffer Records { vec4 records[]; };
+#endif
 layout(std430, binding = 1) buffer Handoff { int handoff[]; };
 layout(std430, binding = 2) buffer PatchQuads { int patch_quads[]; };
 layout(std430, binding = 3) buffer PatchCount { int patch_count[]; };
+layout(std430, binding = 4) buffer Owner { int owner[]; };
+layout(std430, binding = 5) buffer UniqueSlots { int unique_slots[]; };
+layout(std430, binding = 6) buffer UniqueDispatch { uint unique_dispatch[4]; };
 
 uniform int u_grid;             // vertex grid per object view
-uniform int u_count;            // quads (views * (grid - 1)^2)
+uniform int u_count;            // quads (views * (grid - 1)^2); patch vertices (OWNED,
+                                // UNIQUE, COPY)
+uniform int u_factor;           // patch quads per grid quad side (OWNED, COPY)
+uniform int u_history;          // history floats per record (COPY)
+uniform int u_share;            // 1: shared vertices traced once (OWNED); 0: every copy
 
 // glass_sphere strong at grid 128, patches of 3 x 3, excess relMSE over the whole
 // floor [caustic region]: 1 step 2.2e-4 [5.8e-5]; 2 steps 1.2e-4 [1.1e-4]; 3 steps
@@ -58,13 +82,68 @@ void main() {
     }
     handoff[q] = !all_empty && near ? 1 : 0;
 }
-#else  // LIST
+#elif defined OWNED
+layout(local_size_x = 64) in;
+
+void main() {
+    int s = int(gl_GlobalInvocationID.x);
+    if (s >= u_count) return;
+    int side = u_factor + 1, quads = u_grid - 1;
+    int k = s / (side * side), local = s - k * side * side;
+    int i = local % side, j = local / side;
+    int q = patch_quads[k];
+    int view = q / (quads * quads), within = q - view * quads * quads;
+    int qx = within % quads, qy = within / quads;
+    // The patched quads with this vertex as a corner: q, and its neighbours across
+    // the patch edges the vertex lies on.
+    int best = q;
+    ivec2 at = ivec2(qx, qy);
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            if ((dx == -1 && i != 0) || (dx == 1 && i != u_factor)
+                || (dy == -1 && j != 0) || (dy == 1 && j != u_factor)) continue;
+            int cx = qx + dx, cy = qy + dy;
+            if (cx < 0 || cy < 0 || cx >= quads || cy >= quads) continue;
+            int c = (view * quads + cy) * quads + cx;
+            if (handoff[c] != 0 && c < best) {
+                best = c;
+                at = ivec2(cx, cy);
+            }
+        }
+    }
+    ivec2 there = ivec2(i, j) - u_factor * (at - ivec2(qx, qy));
+    owner[s] = best == q || u_share == 0 ? s
+        : (handoff[best] - 1) * side * side + there.y * side + there.x;
+}
+#elif defined COPY
+layout(local_size_x = 64) in;
+
+void main() {
+    int s = int(gl_GlobalInvocationID.x);
+    if (s >= u_count) return;
+    int o = owner[s];
+    if (o == s) return;
+    for (int m = 0; m < 5; ++m) records[s * 5 + m] = records[o * 5 + m];
+    for (int m = 0; m < u_history; ++m) history[s * u_history + m] = history[o * u_history + m];
+}
+#else  // LIST, UNIQUE
 layout(local_size_x = 1024) in;
 #include "compact.glsl"
 
+#if defined UNIQUE
+bool compact_listed(int s) { return owner[s] == s; }
+void compact_store(int slot, int s) { unique_slots[slot] = s; }
+void compact_total(int count) {
+    unique_dispatch = uint[4](uint((count + 63) / 64), 1u, 1u, uint(count));
+}
+#else
 bool compact_listed(int q) { return handoff[q] != 0; }
-void compact_store(int slot, int q) { patch_quads[slot] = q; }
+void compact_store(int slot, int q) {
+    patch_quads[slot] = q;
+    handoff[q] = slot + 1;
+}
 void compact_total(int count) { patch_count[0] = count; }
+#endif
 
 void main() { compact(u_count); }
 #endif

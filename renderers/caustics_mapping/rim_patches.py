@@ -21,6 +21,11 @@ from renderers.caustics_mapping.uniforms import set_uniform
 
 __all__ = ["RimPatches", "find_rim_patches", "grid_shares", "patch_shares"]
 
+#: Neighbouring patches' shared vertices are traced once, by one of them, and copied
+#: to the others (``rim_patches.glsl``): the same records, a third fewer traced on
+#: glass_sphere and bunny. False traces every copy (tests compare the two).
+SHARE_VERTICES = True
+
 
 @dataclass(eq=False)
 class RimPatches:
@@ -29,22 +34,54 @@ class RimPatches:
     Attributes
     ----------
     handoff : moderngl.Buffer
-        One int32 per grid quad ``(view * (grid - 1) + qy) * (grid - 1) + qx``: 1 where
-        the quad's patch is drawn instead of it.
+        One int32 per grid quad ``(view * (grid - 1) + qy) * (grid - 1) + qx``: its
+        patch's index + 1 where the quad's patch is drawn instead of it, else 0.
     quads : moderngl.Buffer
         int32 grid-quad index of patch k, for k < ``count``, in increasing order.
     count : int
         Patches.
+    factor : int
+        Patch quads per grid quad side (``settings.rim_patches``).
+    owner : moderngl.Buffer or None
+        int32 per patch vertex (record order): the record of the same vertex in the
+        patch that traces it (itself where that is its own; ``rim_patches.glsl``).
+    unique : moderngl.Buffer or None
+        The traced records, int32 in increasing order, then (``dispatch``) the trace's
+        dispatch over them: uint32 groups x, y, z and their count.
     """
 
     handoff: moderngl.Buffer
     quads: moderngl.Buffer
     count: int
+    factor: int = 1
+    owner: moderngl.Buffer | None = None
+    unique: moderngl.Buffer | None = None
+    dispatch: moderngl.Buffer | None = None
+
+    @property
+    def vertices(self) -> int:
+        """Patch vertices (records), ``(factor + 1)^2`` per patch."""
+        return self.count * (self.factor + 1) ** 2
 
     def give_back(self, resources: ResourcePool) -> None:
         """Return the buffers to the context's pool."""
-        resources.give_back(self.handoff)
-        resources.give_back(self.quads)
+        for buffer in (self.handoff, self.quads, self.owner, self.unique, self.dispatch):
+            if buffer is not None:
+                resources.give_back(buffer)
+
+    def copy_shared(self, ctx: moderngl.Context, trace: Trace) -> None:
+        """Fill the records (and histories) of ``trace``, the patches' trace, that
+        another patch traced: each from its owner's (``rim_patches.glsl``, COPY)."""
+        if self.owner is None:
+            return
+        trace.records.bind_to_storage_buffer(0)
+        trace.history.bind_to_storage_buffer(7)
+        self.owner.bind_to_storage_buffer(4)
+        program = load_program(ctx, "rim_patches.glsl", defines={"COPY": 1}, compute=True)
+        set_uniform(program, "u_count", self.vertices)
+        set_uniform(program, "u_history", trace.iterations + 1)
+        program.run(group_x=-(-self.vertices // 64))
+        ctx.memory_barrier()
 
     def read_quads(self) -> np.ndarray:
         """The patched grid quads (``count``,) int32, in increasing order."""
@@ -75,9 +112,11 @@ def patch_shares(factor: int) -> np.ndarray:
     return (0.25 * np.outer(edge, edge)).astype(np.float32).reshape(-1)
 
 
-def find_rim_patches(ctx: moderngl.Context, trace: Trace, *, grid: int) -> RimPatches:
+def find_rim_patches(ctx: moderngl.Context, trace: Trace, *, grid: int,
+                     factor: int) -> RimPatches:
     """The quads of ``trace`` (a grid of ``grid`` x ``grid`` vertices per view) that
-    get rim patches."""
+    get rim patches of ``factor`` x ``factor`` quads, and which patch traces each of
+    their vertices."""
     views = trace.count // (grid * grid)
     quads = views * (grid - 1) ** 2
     resources = pool(ctx)
@@ -96,4 +135,21 @@ def find_rim_patches(ctx: moderngl.Context, trace: Trace, *, grid: int) -> RimPa
         ctx.memory_barrier()
     found = int(np.frombuffer(count.read(), np.int32)[0])
     resources.give_back(count)
-    return RimPatches(handoff, listed, found)
+    patches = RimPatches(handoff, listed, found, factor)
+    if found:
+        vertices = patches.vertices
+        patches.owner = resources.buffer(4 * vertices)
+        patches.unique = resources.buffer(4 * vertices)
+        patches.dispatch = resources.buffer(16)
+        for binding, buffer in ((4, patches.owner), (5, patches.unique),
+                                (6, patches.dispatch)):
+            buffer.bind_to_storage_buffer(binding)
+        for stage, groups in (("OWNED", -(-vertices // 64)), ("UNIQUE", 1)):
+            program = load_program(ctx, "rim_patches.glsl", defines={stage: 1}, compute=True)
+            set_uniform(program, "u_grid", grid)
+            set_uniform(program, "u_count", vertices)
+            set_uniform(program, "u_factor", factor)
+            set_uniform(program, "u_share", int(SHARE_VERTICES))
+            program.run(group_x=groups)
+            ctx.memory_barrier()
+    return patches
