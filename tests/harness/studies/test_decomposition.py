@@ -282,8 +282,9 @@ def test_outputs_carry_the_decomposition(glass, tmp_path):
 @pytest.mark.slow
 def test_compare_writes_the_decomposition(tmp_path):
     """``compare --studies metrics,decomposition --quick`` end to end on a small glass
-    sphere: decomposition.csv per preset, the record in metrics.json with the measured
-    noise floor (an independent reference), the report's section, and no other study."""
+    sphere: decomposition.csv per preset (strong's with its rim patches' step last),
+    the record in metrics.json with the measured noise floor (an independent
+    reference), the report's section, and no other study."""
     scene, out = _small_scene(tmp_path), tmp_path / "out"
     assert main(["compare", str(scene), "-o", str(out), "--quick", "-q", "--cache-dir",
                  str(tmp_path / "cache"), "--studies", "metrics,decomposition", *SMALL]) == 0
@@ -293,7 +294,8 @@ def test_compare_writes_the_decomposition(tmp_path):
             reader = csv.DictReader(f)
             rows = list(reader)
         assert tuple(reader.fieldnames[:8]) == ISSUE_COLUMNS
-        assert tuple(r["step"] for r in rows) == STEP_NAMES
+        steps = STEP_NAMES + (("rim patches",) if preset == "strong" else ())
+        assert tuple(r["step"] for r in rows) == steps
         record = json.loads((folder / "metrics.json").read_text())["studies"]["decomposition"]
         assert record["noise_floor_kind"] == "measured" and record["run_time_s"] > 0
         assert not (folder / "convergence.csv").exists()       # not asked for
