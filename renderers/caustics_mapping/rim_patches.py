@@ -46,8 +46,10 @@ class RimPatches:
         int32 per patch vertex (record order): the record of the same vertex in the
         patch that traces it (itself where that is its own; ``rim_patches.glsl``).
     unique : moderngl.Buffer or None
-        The traced records, int32 in increasing order, then (``dispatch``) the trace's
-        dispatch over them: uint32 groups x, y, z and their count.
+        The records the trace traces (owned ones), int32 in increasing order.
+    dispatch : moderngl.Buffer or None
+        The trace's indirect dispatch over ``unique``: uint32 groups x, y, z, then
+        their count.
     """
 
     handoff: moderngl.Buffer
