@@ -124,7 +124,8 @@ void main() {
     int o = owner[s];
     if (o == s) return;
     for (int m = 0; m < 5; ++m) records[s * 5 + m] = records[o * 5 + m];
-    for (int m = 0; m < u_history; ++m) history[s * u_history + m] = history[o * u_history + m];
+    for (int m = 0; m < u_history; ++m)
+        history[s * u_history + m] = history[o * u_history + m];
 }
 #else  // LIST, UNIQUE
 layout(local_size_x = 1024) in;

@@ -2,9 +2,9 @@
 // `footprint`, and the quarters `triangles` cannot draw), included by
 // caustic_splat.glsl and receiver_splat.glsl when TRIANGLES is not defined: a
 // compute pass sets up one Gaussian per trace record that has one, then one vertex
-// per such record draws it as a square point sprite over every target pixel the Gaussian's cut-off
-// ellipse reaches, or, where the ellipse is long or leaning, as a rectangle along
-// its axes (cutoff_box). With c the hit in target pixels, S the
+// per such record draws it as a square point sprite over every target pixel the
+// Gaussian's cut-off ellipse reaches, or, where the ellipse is long or leaning, as a
+// rectangle along its axes (cutoff_box). With c the hit in target pixels, S the
 // covariance (target pixels^2) and q = x - c for a pixel centre x, the pixel gets
 //     w = exp(-q^T S^-1 q / 2)   where q^T S^-1 q <= u_cut^2 (else nothing),
 //     rgb = value * w,  a = w,   value = share * flux / (norm * A):
@@ -86,13 +86,14 @@ layout(local_size_x = 64) in;
 #endif
 uniform int u_count;            // records (invocations past it do nothing)
 
-// Whether record i has a Gaussian to draw: its hit in target pixels c, its share
-// of the vertex's flux (the quarters of its quads the triangles do not draw).
-bool gaussian_wanted(int i, out vec2 c, out float share) {
+// Whether record i, grid vertex (view, tx, ty), has a Gaussian to draw: its hit in
+// target pixels c, its share of the vertex's flux (the quarters of its quads the
+// triangles do not draw).
+bool gaussian_wanted(int i, out vec2 c, out float share, out int view, out int tx,
+                     out int ty) {
     share = 0.0;
-    if (!to_target(i, c)) return false;
-    int view, tx, ty;
     record_vertex(i, view, tx, ty);
+    if (!to_target(i, c)) return false;
     share = gaussian_share(view, tx, ty);
     return share > 0.0;
 }
@@ -104,9 +105,8 @@ bool gaussian_setup(int i, out vec2 c, out mat2 inv, out vec3 value, out float s
     value = vec3(0.0);
     size = 0.0;
     float share;
-    if (!gaussian_wanted(i, c, share)) return false;
     int view, tx, ty;
-    record_vertex(i, view, tx, ty);
+    if (!gaussian_wanted(i, c, share, view, tx, ty)) return false;
     vec3 hit = splat_records[i * 5 + 2].xyz;
     vec3 normal = splat_records[i * 5 + 4].xyz;
     mat2 cov = gaussian_covariance(view, tx, ty, hit, normal, c);
@@ -142,7 +142,8 @@ void main() {
     if (i >= u_count) return;
     vec2 c;
     float share;
-    gaussian_flags[i] = gaussian_wanted(i, c, share) ? 1 : 0;
+    int view, tx, ty;
+    gaussian_flags[i] = gaussian_wanted(i, c, share, view, tx, ty) ? 1 : 0;
 }
 #elif defined LIST
 bool compact_listed(int i) { return gaussian_flags[i] != 0; }
@@ -156,7 +157,9 @@ void main() { compact(u_count); }
 #elif defined COMPACT
 // The listed records drawn as rectangles, in record order (compact.glsl), so the
 // rectangles blend in the same order on every run.
-bool compact_listed(int slot) { return int(gaussians[gaussian_list[slot] * 3].w + 0.5) == DRAWN_BOX; }
+bool compact_listed(int slot) {
+    return int(gaussians[gaussian_list[slot] * 3].w + 0.5) == DRAWN_BOX;
+}
 void compact_store(int slot, int listed) { gaussian_boxes[slot] = gaussian_list[listed]; }
 void compact_total(int count) { boxes_draw = int[4](4, count, 0, 0); }
 

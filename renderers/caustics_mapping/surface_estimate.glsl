@@ -11,9 +11,9 @@
 // ray (the light's distance, or the depth along a directional light; the eye's
 // distance); and the width (m) at x of one texel of that surface's image. As in the
 // caustic trace, the estimators stop at an estimate within u_converged of those
-// texels of the surface (0: only on it). It defines ESTIMATOR (0 modified, 1 newton, 2 secant) and SAFEGUARDED
-// (0 or 1) at compile time (as uniforms, on llvmpipe, every variant's code ran
-// masked: 1.5x the time).
+// texels of the surface (0: only on it). It defines ESTIMATOR (0 modified, 1
+// newton, 2 secant) and SAFEGUARDED (0 or 1) at compile time (as uniforms, on
+// llvmpipe, every variant's code ran masked: 1.5x the time).
 
 void estimate_record(int record, int k, float d) {}   // no history here
 
