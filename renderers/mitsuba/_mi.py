@@ -1,12 +1,15 @@
 """The one place that imports Mitsuba and Dr.Jit.
 
 :func:`renderers.mitsuba.llvm.configure_drjit` runs first, so Dr.Jit's LLVM backend finds
-the libLLVM it needs (>= 16) instead of guessing. The variant is ``cuda_ad_rgb`` where
-Dr.Jit finds a CUDA device, else ``llvm_ad_rgb``; the environment variable
-:data:`VARIANT_ENV` forces one (``CAUSTICS_MITSUBA_VARIANT=llvm_ad_rgb`` keeps a GPU
-machine on the CPU). ``scalar_rgb`` is a recorded fallback (the camera image works,
-the vectorised photon tracer refuses to run on it: one photon per Python call is
-unusable). The variant is part of every reference's cache key.
+the libLLVM it needs (>= 16) instead of guessing; a forced CUDA variant skips it (Dr.Jit's
+CUDA backend compiles through the driver, so a GPU machine needs no libLLVM).
+
+The variant is ``cuda_ad_rgb`` where Dr.Jit finds a CUDA device, else ``llvm_ad_rgb``;
+the environment variable :data:`VARIANT_ENV` forces one
+(``CAUSTICS_MITSUBA_VARIANT=llvm_ad_rgb`` keeps a GPU machine on the CPU). ``scalar_rgb``
+is a recorded fallback (the camera image works, the vectorised photon tracer refuses to
+run on it: one photon per Python call is unusable). The variant is part of every
+reference's cache key.
 """
 
 from __future__ import annotations
@@ -36,13 +39,14 @@ class MitsubaError(HarnessError, RuntimeError):
 @functools.cache
 def load() -> tuple[ModuleType, ModuleType, str]:
     """Import Mitsuba and Dr.Jit, select the variant; return ``(mi, dr, variant)``."""
-    configure_drjit()
+    forced = os.environ.get(VARIANT_ENV, "").strip()
+    if not forced.startswith("cuda_"):
+        configure_drjit()
     # Deferred: Dr.Jit reads DRJIT_LIBLLVM_PATH when imported, and the CLI must start
     # without loading either library.
     import drjit as dr  # noqa: PLC0415 - heavy; needs DRJIT_LIBLLVM_PATH set first
     import mitsuba as mi  # noqa: PLC0415 - heavy; needs DRJIT_LIBLLVM_PATH set first
 
-    forced = os.environ.get(VARIANT_ENV, "").strip()
     if forced:
         try:
             mi.set_variant(forced)

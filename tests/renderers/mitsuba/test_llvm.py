@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 
 import pytest
 
@@ -52,3 +54,32 @@ def test_install_is_attempted_as_root(monkeypatch):
     assert calls == ["libllvm19"]
 
 
+
+
+#: Loads Mitsuba with CUDA forced and the libLLVM lookup replaced by a failure.
+_FORCED_CUDA = """
+import renderers.mitsuba._mi as m
+def asked(**kwargs):
+    raise AssertionError("libLLVM was asked for")
+m.configure_drjit = asked
+try:
+    print("loaded", m.load()[2])
+except m.MitsubaError as error:
+    print("refused", error)
+"""
+
+
+def test_forced_cuda_variant_asks_for_no_libllvm():
+    """Regression lock: with ``CAUSTICS_MITSUBA_VARIANT=cuda_ad_rgb`` Mitsuba loads
+    without looking for libLLVM. A GPU machine that is offline and has no libLLVM
+    can still trace on CUDA. Here there is no CUDA device, so Mitsuba refuses the
+    variant with MitsubaError, which names it; on a GPU machine the variant loads.
+    Run in a fresh process, so this process's variant stays as it is."""
+    env = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH"}
+    env["CAUSTICS_MITSUBA_VARIANT"] = "cuda_ad_rgb"
+    proc = subprocess.run([sys.executable, "-c", _FORCED_CUDA], env=env, text=True,
+                          capture_output=True, timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout.strip().splitlines()[-1]
+    assert out == "loaded cuda_ad_rgb" or out.startswith(
+        "refused CAUSTICS_MITSUBA_VARIANT=cuda_ad_rgb: Mitsuba cannot use this variant")
