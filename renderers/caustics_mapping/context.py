@@ -195,13 +195,24 @@ class PassTimer:
         return _Measure(self, name)
 
 
+def _time_query(ctx: moderngl.Context) -> moderngl.Query:
+    """The context's one ``GL_TIME_ELAPSED`` query, made on first use and reused by
+    every pass (passes are timed one after another, never nested; moderngl's Query
+    has no ``release``, so a query per pass would leak one GL object each)."""
+    cache = ctx.extra if isinstance(ctx.extra, dict) else {}
+    ctx.extra = cache
+    if "time_query" not in cache:
+        cache["time_query"] = ctx.query(time=True)
+    return cache["time_query"]
+
+
 class _Measure:
     def __init__(self, timer: PassTimer, name: str) -> None:
         self.timer, self.name = timer, name
 
     def __enter__(self) -> None:
         self.timer.ctx.finish()
-        self.query = self.timer.ctx.query(time=True) if self.timer.queries else None
+        self.query = _time_query(self.timer.ctx) if self.timer.queries else None
         if self.query is not None:
             self.query.__enter__()
         self.start = time.perf_counter()
@@ -214,7 +225,6 @@ class _Measure:
         self.timer.timings[self.name] = self.timer.timings.get(self.name, 0.0) + elapsed
         if self.query is not None:
             nanoseconds = self.query.elapsed
-            self.query.release()
             if 0 < nanoseconds < _INVALID_QUERY:
                 gpu = self.timer.gpu_timings
                 gpu[self.name] = gpu.get(self.name, 0.0) + nanoseconds * 1e-9
