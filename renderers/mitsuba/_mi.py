@@ -1,8 +1,10 @@
 """The one place that imports Mitsuba and Dr.Jit.
 
 :func:`renderers.mitsuba.llvm.configure_drjit` runs first, so Dr.Jit's LLVM backend finds
-the libLLVM it needs (>= 16) instead of guessing; a forced CUDA variant skips it (Dr.Jit's
-CUDA backend compiles through the driver, so a GPU machine needs no libLLVM).
+the libLLVM it needs (>= 16) instead of guessing. Dr.Jit's CUDA backend compiles
+through the driver and needs no libLLVM: a forced CUDA variant skips the step, and so
+does the choice by device where no libLLVM is found and the driver reports a CUDA
+device (an offline GPU machine without libLLVM then traces on ``cuda_ad_rgb``).
 
 The variant is ``cuda_ad_rgb`` where Dr.Jit finds a CUDA device, else ``llvm_ad_rgb``;
 the environment variable :data:`VARIANT_ENV` forces one
@@ -19,7 +21,7 @@ import os
 from types import ModuleType
 
 from renderers.mitsuba.bsdf import register
-from renderers.mitsuba.llvm import configure_drjit
+from renderers.mitsuba.llvm import configure_drjit, cuda_device_present, find_libllvm
 from scenes.errors import HarnessError
 
 __all__ = ["CUDA_VARIANT", "FALLBACK_VARIANT", "PREFERRED_VARIANT", "VARIANT_ENV",
@@ -40,7 +42,7 @@ class MitsubaError(HarnessError, RuntimeError):
 def load() -> tuple[ModuleType, ModuleType, str]:
     """Import Mitsuba and Dr.Jit, select the variant; return ``(mi, dr, variant)``."""
     forced = os.environ.get(VARIANT_ENV, "").strip()
-    if not forced.startswith("cuda_"):
+    if _needs_libllvm(forced):
         configure_drjit()
     # Deferred: Dr.Jit reads DRJIT_LIBLLVM_PATH when imported, and the CLI must start
     # without loading either library.
@@ -60,6 +62,14 @@ def load() -> tuple[ModuleType, ModuleType, str]:
 
     register(mi, dr)
     return mi, dr, variant
+
+
+def _needs_libllvm(forced: str) -> bool:
+    """Whether :func:`load` must settle libLLVM first: not for a forced CUDA variant,
+    nor for the choice by device where none is found and a CUDA device is present."""
+    if forced:
+        return not forced.startswith("cuda_")
+    return find_libllvm() is not None or not cuda_device_present()
 
 
 def _by_device(mi, dr) -> str:

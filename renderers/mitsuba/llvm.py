@@ -7,12 +7,14 @@ set explicitly in ``DRJIT_LIBLLVM_PATH`` before Dr.Jit is imported.
 
 from __future__ import annotations
 
+import ctypes
 import glob
 import os
 
 from renderers.system import find_or_install
 
-__all__ = ["LLVM_PACKAGE", "configure_drjit", "ensure_libllvm", "find_libllvm"]
+__all__ = ["LLVM_PACKAGE", "configure_drjit", "cuda_device_present", "ensure_libllvm",
+           "find_libllvm"]
 
 #: Debian package that provides a libLLVM Dr.Jit 1.5 accepts.
 LLVM_PACKAGE = "libllvm19"
@@ -61,3 +63,17 @@ def configure_drjit(*, install: bool = True) -> str:
     path = ensure_libllvm(install=install)
     os.environ["DRJIT_LIBLLVM_PATH"] = path
     return path
+
+
+def cuda_device_present() -> bool:
+    """Whether the NVIDIA driver reports a CUDA device: ``cuInit`` and
+    ``cuDeviceGetCount`` of ``libcuda.so.1`` through ctypes, without importing Dr.Jit
+    (which must not be imported before ``DRJIT_LIBLLVM_PATH`` is settled). False where
+    the driver library is missing or reports no device."""
+    try:
+        driver = ctypes.CDLL("libcuda.so.1")
+    except OSError:
+        return False
+    count = ctypes.c_int(0)
+    return (driver.cuInit(0) == 0 and driver.cuDeviceGetCount(ctypes.byref(count)) == 0
+            and count.value > 0)

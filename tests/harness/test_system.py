@@ -52,3 +52,20 @@ def test_main_fails_on_missing_chromium_only_on_ci(monkeypatch, tmp_path, capsys
     monkeypatch.setenv("CI", ci)
     assert system.main() == code
     assert "apt-get install -y chromium" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("cuda", "code"), [(False, 1), (True, 0)])
+def test_main_without_libllvm_fails_unless_a_cuda_device_is_present(monkeypatch, capsys,
+                                                                    cuda, code):
+    """Without libLLVM, setup fails, except where a CUDA device is present: Mitsuba then
+    traces on cuda_ad_rgb, and the warning says llvm_ad_rgb is unavailable."""
+    def missing(install):
+        raise apt.SystemSetupError("no libLLVM; run: apt-get install -y libllvm19")
+
+    monkeypatch.setattr(system, "configure_drjit", missing)
+    monkeypatch.setattr(system, "cuda_device_present", lambda: cuda)
+    monkeypatch.setattr(system, "ensure_chromium", lambda install: "/usr/bin/chromium")
+    assert system.main() == code
+    err = capsys.readouterr().err
+    assert "apt-get install -y libllvm19" in err
+    assert ("llvm_ad_rgb is unavailable" in err) == cuda

@@ -56,12 +56,17 @@ def test_install_is_attempted_as_root(monkeypatch):
 
 
 
-#: Loads Mitsuba with CUDA forced and the libLLVM lookup replaced by a failure.
+#: Loads Mitsuba with the libLLVM set-up replaced by a failure (and, with argument
+#: ``auto``, as on a GPU machine without libLLVM: none found, a CUDA device reported).
 _FORCED_CUDA = """
+import sys
 import renderers.mitsuba._mi as m
 def asked(**kwargs):
     raise AssertionError("libLLVM was asked for")
 m.configure_drjit = asked
+if sys.argv[1:] == ["auto"]:
+    m.find_libllvm = lambda: None
+    m.cuda_device_present = lambda: True
 try:
     print("loaded", m.load()[2])
 except m.MitsubaError as error:
@@ -83,3 +88,27 @@ def test_forced_cuda_variant_asks_for_no_libllvm():
     out = proc.stdout.strip().splitlines()[-1]
     assert out == "loaded cuda_ad_rgb" or out.startswith(
         "refused CAUSTICS_MITSUBA_VARIANT=cuda_ad_rgb: Mitsuba cannot use this variant")
+
+
+def test_choice_by_device_asks_for_no_libllvm_where_none_is_found_beside_cuda():
+    """Regression lock: with no variant forced, where no libLLVM is found and the
+    driver reports a CUDA device (both faked here), Mitsuba loads without the
+    libLLVM set-up, which would install or fail. Dr.Jit then finds no CUDA device
+    here and takes llvm_ad_rgb, through the DRJIT_LIBLLVM_PATH the environment
+    already has; on a GPU machine it takes cuda_ad_rgb."""
+    env = {k: v for k, v in os.environ.items() if k != "CAUSTICS_MITSUBA_VARIANT"}
+    env.setdefault("DRJIT_LIBLLVM_PATH", llvm.find_libllvm() or "")
+    proc = subprocess.run([sys.executable, "-c", _FORCED_CUDA, "auto"], env=env, text=True,
+                          capture_output=True, timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip().splitlines()[-1] in ("loaded llvm_ad_rgb", "loaded cuda_ad_rgb")
+
+
+def test_no_cuda_device_where_the_driver_library_is_missing(monkeypatch):
+    """Regression lock of the probe: without libcuda.so.1 there is no CUDA
+    device (and nothing is raised)."""
+    def no_library(name):
+        raise OSError(f"{name}: cannot open shared object file")
+
+    monkeypatch.setattr(llvm.ctypes, "CDLL", no_library)
+    assert llvm.cuda_device_present() is False
