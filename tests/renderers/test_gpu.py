@@ -18,6 +18,8 @@ import sys
 import numpy as np
 import pytest
 
+from renderers.mitsuba.llvm import find_libllvm
+
 pytestmark = pytest.mark.gpu
 
 #: Renders glass_sphere's receiver 0 (64 x 64) with the device the environment
@@ -68,6 +70,8 @@ def test_photon_tracer_on_cuda_equals_llvm(tmp_path):
     of the two 4-seed means, and fewer than 1 % of caustic texels differ by more
     than 5 standard errors (rounding can move a photon across a texel edge; at
     5 sigma Gaussian noise alone exceeds it in 6e-7 of texels)."""
+    if find_libllvm() is None:
+        pytest.skip("no libLLVM beside the GPU: llvm_ad_rgb cannot run here")
     gpu, gvar, gdev = _render(tmp_path, "mitsuba", "cuda", CAUSTICS_MITSUBA_VARIANT="cuda_ad_rgb")
     cpu, cvar, cdev = _render(tmp_path, "mitsuba", "llvm", CAUSTICS_MITSUBA_VARIANT="llvm_ad_rgb")
     assert (gdev, cdev) == ("cuda_ad_rgb", "llvm_ad_rgb")
@@ -85,8 +89,10 @@ def test_caustics_mapping_on_nvidia_equals_llvmpipe(tmp_path):
     NVIDIA EGL device and llvmpipe give the same receiver map up to float rounding
     and rasterisation rules (which texel centre a splat edge covers): the flux
     agrees within 0.5 % and the caustic region's relMSE between them is under
-    1e-3, far below the method's own error against the reference (about 1e-2,
-    strong preset, glass_sphere). Skipped where llvmpipe has no EGL device."""
+    1e-5, a fifth of the strong preset's own excess error against the reference
+    on glass_sphere (5.8e-5), so the device cannot move a verdict (measured on an
+    H100 against llvmpipe: 5.0e-8, flux ratio 0.99977). Skipped where llvmpipe has
+    no EGL device."""
     gpu, _, gdev = _render(tmp_path, "gl", "nvidia")
     if "llvmpipe" in gdev.lower():
         pytest.skip("no hardware EGL device")
@@ -104,4 +110,4 @@ def test_caustics_mapping_on_nvidia_equals_llvmpipe(tmp_path):
     relmse = float(np.mean(((gpu - cpu)[lit]) ** 2 / (cpu[lit] ** 2 + 1e-2 * cpu.max() ** 2)))
     print(f"{gdev} vs {cdev}: flux ratio {gpu.sum() / cpu.sum():.5f}, relMSE {relmse:.2e}")
     assert abs(gpu.sum() / cpu.sum() - 1) < 5e-3
-    assert relmse < 1e-3
+    assert relmse < 1e-5
