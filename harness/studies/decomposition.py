@@ -22,7 +22,11 @@ Steps (each a receiver map scored against the reference on receiver 0):
    by the exact hit of the same ray (v, r) on the receivers (Mitsuba, the receivers
    alone, nearest front-side hit). Adds the image-space geometry error, and what the
    exact chain drops that the method cannot see (a ray that re-enters the object
-   after its exit: the exact step's ``blocked`` fate).
+   after its exit: the exact step's ``blocked`` fate). A record the method left
+   unresolved (lost, diverged, unconverged) never met the method's own tests of the
+   segment to its hit (a reflected ray meeting its object again is tested at the
+   estimate), so its exact hit takes the exact chain's answer: an object on the
+   segment drops it (status ``reentered``), as the method drops it.
 4. ``estimated hits``: the method itself, receiver hits from the preset's estimator
    and iteration count (its own render). With rim patches (``rim_patches`` > 1), the
    method's grid records alone, re-splatted: the method without its patches;
@@ -192,14 +196,19 @@ def _splat_timed(runner: RealtimeRunner, scene: Scene, records, repeats: int
 
 
 def image_space_records(hits: dict[str, np.ndarray], tracer: SurfaceTracer, scene: Scene,
-                        geometry) -> list[list[np.ndarray]]:
+                        geometry, *, blockers: SurfaceTracer | None = None
+                        ) -> list[list[np.ndarray]]:
     """The method's records (``Frame.hits``) with every receiver hit exact.
 
     Each record whose ray (v, r) left the object (status hit, lost, diverged or
     unconverged) gets the nearest front-side receiver hit of that ray from
     ``tracer`` (built on the receivers alone): status ``hit`` there, else ``lost``.
-    Fluxes stay the method's, but for Beer-Lambert below an absorbing water surface,
-    which the method takes over its estimated distance: it is moved to the exact one.
+    With ``blockers`` (a tracer with the objects), a record the method left
+    unresolved whose segment from v to that hit meets an object is ``reentered``
+    instead (not splatted): the method's own tests of that segment ran only on its
+    verified estimates (:func:`_blocked`). Fluxes stay the method's, but for
+    Beer-Lambert below an absorbing water surface, which the method takes over its
+    estimated distance: it is moved to the exact one.
 
     Raises
     ------
@@ -214,9 +223,16 @@ def image_space_records(hits: dict[str, np.ndarray], tracer: SurfaceTracer, scen
     found = tracer(origin[traced], direction[traced])
     front = np.einsum("ij,ij->i", direction[traced], found.shading_normal) < 0
     ok = (found.kind == SurfaceTracer.RECEIVER) & front
+    dropped = np.zeros_like(ok)
+    if blockers is not None:
+        check = ok & (status[traced] != STATUS["hit"])
+        dropped[check] = _blocked(blockers, origin[traced][check], found.position[check],
+                                  found.geometric_normal[check])
+        ok &= ~dropped
     out = {k: np.array(v, copy=True) for k, v in hits.items()}
     idx = np.flatnonzero(traced)
-    out["status"][idx] = np.where(ok, STATUS["hit"], STATUS["lost"])
+    out["status"][idx] = np.where(ok, STATUS["hit"],
+                                  np.where(dropped, STATUS["reentered"], STATUS["lost"]))
     out["hit"][idx] = np.where(ok[:, None], found.position, origin[traced])
     out["distance"][idx] = np.where(ok, found.distance, 0.0)
     out["receiver"][idx] = np.where(ok, found.index, -1)
@@ -227,6 +243,19 @@ def image_space_records(hits: dict[str, np.ndarray], tracer: SurfaceTracer, scen
         moved = np.exp(-sigma[None, :] * (out["distance"][idx] - estimated)[:, None])
         out["flux"][idx] = out["flux"][idx] * np.where(ok[:, None], moved, 1.0)
     return split_records(out)
+
+
+def _blocked(blockers: SurfaceTracer, origin: np.ndarray, hit: np.ndarray,
+             receiver_normal: np.ndarray) -> np.ndarray:
+    """Whether an object lies on each segment from ``origin`` (on an object, m) to its
+    receiver ``hit`` (m): a ray cast back from the hit towards the origin, spawned off
+    the receiver (``receiver_normal``: its geometric normal there), meets an object
+    before the origin's own surface, that is short of the segment's length by more
+    than 0.1 % (float32 hits land within about 1e-6 of it relative)."""
+    segment = origin - hit
+    length = np.linalg.norm(segment, axis=1)
+    back = blockers(hit, segment / length[:, None], leaving=receiver_normal)
+    return (back.kind == SurfaceTracer.OBJECT) & (back.distance < length * (1.0 - 1e-3))
 
 
 def _water_absorption(scene: Scene, geometry) -> np.ndarray | None:
@@ -325,7 +354,8 @@ def decomposition_study(runner: RealtimeRunner, reference, *, noise_floor: float
     method_trace_s = runner.median(clock=_trace_clock)
     method_splat_s = runner.median(clock=_splat_clock)
     image_space, _, cast_s = median_seconds(
-        lambda: image_space_records(frame.hits, receivers, scene, geometry), repeats=repeats)
+        lambda: image_space_records(frame.hits, receivers, scene, geometry, blockers=objects),
+        repeats=repeats)
     maps, splat_s, _ = _splat_timed(runner, scene, image_space, repeats)
     lookup = f"{settings.lookup} lookups, exit surface at {settings.back_resolution}²"
     steps.append(_Step("image-space surfaces", f"the method's first and exit surfaces from "

@@ -7,8 +7,9 @@ within 2× the reference's noise floor, slow); **physical requirements** (the
 expected noise floor is the relMSE two independent draws score; the peak ratio's
 known answer); **regression locks** (the last step is the method itself, the
 decomposition of glass_sphere's paper preset as measured, the verdict rule on
-hand-made numbers); the outputs ``compare --studies decomposition`` writes, and that
-a compare without it does not run it.
+hand-made numbers, the image-space step's exact hits behind an object); the outputs
+``compare --studies decomposition`` writes, and that a compare without it does not
+run it.
 
 Measured on this machine (llvmpipe; reference 4 × 2 M photons at 256²), glass_sphere:
 
@@ -52,11 +53,13 @@ from harness.studies.decomposition import (
     _summary,
     decomposition_study,
     expected_noise_floor,
+    image_space_records,
     peak_ratio,
 )
 from harness.studies.exact_paths import exact_paths
 from harness.studies.runner import RealtimeRunner
 from renderers.caustics_mapping import render_frame
+from renderers.caustics_mapping.caustic_trace import STATUS
 from renderers.caustics_mapping.methods import PAPER, STRONG
 from renderers.caustics_mapping.record_splat import splat_records
 from renderers.mitsuba.reference import render_reference
@@ -181,6 +184,39 @@ def test_glass_sphere_decomposes_as_measured(glass):
 
 
 @pytest.mark.physical_requirement
+def test_image_space_step_drops_unresolved_rays_an_object_blocks():
+    """Regression lock: in the image-space step, a ray the method left unresolved
+    whose exact receiver hit lies behind an object is dropped as ``reentered``. The
+    method never tested that segment. A ray it verified keeps its exact hit, since
+    its own tests had their say; so does an unblocked ray. Without ``blockers``,
+    every exact hit is kept, as before. glass_sphere: sphere of radius 1 at z = 2
+    over the floor z = 0. Rays leave the sphere's top straight down, through the
+    sphere (blocked), and its side (x = 1) outwards and down to (2.5, 0, 0)."""
+    scene = _glass_sphere()
+    geometry = build_geometry(scene)
+    top, side = [0.0, 0.0, 3.0], [1.0, 0.0, 2.0]
+    down, out = [0.0, 0.0, -1.0], [0.6, 0.0, -0.8]
+    unconverged, hit = STATUS["unconverged"], STATUS["hit"]
+    hits = {"origin": np.array([top, top, side], np.float32),
+            "direction": np.array([down, down, out], np.float32),
+            "status": np.array([unconverged, hit, unconverged], np.int32),
+            "view": np.zeros(3, np.int32), "distance": np.full(3, 2.0, np.float32),
+            "hit": np.zeros((3, 3), np.float32), "flux": np.ones((3, 3), np.float32),
+            "receiver": np.zeros(3, np.int32), "normal": np.zeros((3, 3), np.float32),
+            "light": np.zeros(3, np.int32), "channel": np.zeros(3, np.int32)}
+    receivers = SurfaceTracer(scene, geometry, objects=False)
+    blockers = SurfaceTracer(scene, geometry)
+
+    def statuses(**kwargs):
+        [[records]] = image_space_records(hits, receivers, scene, geometry, **kwargs)
+        return records[:, 2, 3].astype(int).tolist(), records[:, 2, :3]
+
+    status, where = statuses(blockers=blockers)
+    assert status == [STATUS["reentered"], hit, hit]
+    np.testing.assert_allclose(where[1:], [[0.0, 0.0, 0.0], [2.5, 0.0, 0.0]], atol=1e-5)
+    assert statuses()[0] == [hit, hit, hit]
+
+
 def test_expected_noise_floor_is_what_independent_draws_score():
     """Two independent means of per-texel variance σ² score, against each other,
     relMSE ≈ mean(2 σ² / (ref² + ε)) (the noise floor the figures use). Checked on
