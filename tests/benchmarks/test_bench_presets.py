@@ -6,9 +6,10 @@ warmed up once (shader compilation is not a frame cost), then ROUNDS rounds alte
 paper and strong, so drift of the machine falls on both alike. Reported per preset:
 the median wall time of ``render()`` (``time.perf_counter``, which on llvmpipe
 includes the ``ctx.finish()`` inside every pass) and the median of each pass; and
-the median over rounds of the per-round ratio strong / paper, with the range of
-the rounds' ratios as its distribution-free interval. Fails only on a broken
-render.
+the median over rounds of the per-round ratio strong / paper, with its
+distribution-free 95 % interval (:func:`median_interval`). On a hardware device also the
+GPU work alone (the passes' GL timer queries summed) and its ratio. Fails only on a
+broken render.
 """
 
 from __future__ import annotations
@@ -61,6 +62,7 @@ def test_bench_presets(ctx, name):
         render(scene, ctx=ctx)
     frames = {p: [] for p in scenes}
     passes = {p: {} for p in scenes}
+    gpu = {p: [] for p in scenes}
     for _ in range(ROUNDS):
         for preset, scene in scenes.items():
             start = time.perf_counter()
@@ -69,6 +71,8 @@ def test_bench_presets(ctx, name):
             assert np.isfinite(result.receivers[0].irradiance).all()
             for key, seconds in result.timings.items():
                 passes[preset].setdefault(key, []).append(seconds * 1e3)
+            if "gpu_timings" in result.metadata:
+                gpu[preset].append(sum(result.metadata["gpu_timings"].values()) * 1e3)
     ratios = np.asarray(frames["strong"]) / np.asarray(frames["paper"])
     ratio = np.median(ratios)
     print(f"\n{name}: presets on {result.metadata['gl_renderer']}, {ROUNDS} alternating "
@@ -79,6 +83,13 @@ def test_bench_presets(ctx, name):
     low, high, coverage = median_interval(ratios)
     print(f"  strong / paper: {ratio:.2f} (median of per-round ratios; [{low:.2f}, "
           f"{high:.2f}] holds the median with probability {coverage:.3f})")
+    if all(len(v) == ROUNDS for v in gpu.values()):
+        # Hardware only: the GPU work alone, the passes' GL timer queries summed.
+        work = np.asarray(gpu["strong"]) / np.asarray(gpu["paper"])
+        low, high, _ = median_interval(work)
+        print(f"  GPU work (GL_TIME_ELAPSED, summed over passes): paper "
+              f"{np.median(gpu['paper']):.2f} ms, strong {np.median(gpu['strong']):.2f} ms, "
+              f"ratio {np.median(work):.2f} [{low:.2f}, {high:.2f}]")
     for key in passes["strong"]:
         paper = np.median(passes["paper"].get(key, [np.nan]))
         print(f"    {key:36s} paper {paper:7.2f} ms  strong "
