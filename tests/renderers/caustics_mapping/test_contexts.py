@@ -33,22 +33,26 @@ def test_render_after_another_context_came_and_went():
         first.release()
 
 
-def test_pass_timer_runs_its_gl_timer_query_pass_after_pass(ctx):
+def test_pass_timer_runs_its_gl_timer_query_pass_after_pass():
     """Regression lock: on a hardware device each timed pass runs inside a
     GL_TIME_ELAPSED query. moderngl's Query has no ``release`` (calling it failed
     every render on an NVIDIA GPU at its first pass). Queries are forced on here: llvmpipe
     runs them but answers with an invalid count, so ``gpu_timings`` stays empty.
-    Three passes in a row must run without a Python or GL error and share one query."""
-    timer = PassTimer(ctx)
-    timer.queries = True
-    target = ctx.simple_framebuffer((8, 8))
-    queries = set()
-    for name in ("first", "second", "first"):
-        with timer.measure(name):
-            target.use()
-            target.clear(0.5, 0.5, 0.5, 1.0)
-        queries.add(id(ctx.extra["time_query"]))
-    target.release()
-    assert set(timer.timings) == {"first", "second"}
-    assert len(queries) == 1
-    assert ctx.error == "GL_NO_ERROR"
+    Three passes in a row must run without a Python or GL error and share one query.
+    A context of its own, so the shared one keeps no query or framebuffer of this test."""
+    ctx = create_context()
+    try:
+        timer = PassTimer(ctx)
+        timer.queries = True
+        target = ctx.simple_framebuffer((8, 8))
+        queries = set()
+        for name in ("first", "second", "first"):
+            with timer.measure(name):
+                target.use()
+                target.clear(0.5, 0.5, 0.5, 1.0)
+            queries.add(id(ctx.extra["time_query"]))
+        assert set(timer.timings) == {"first", "second"}
+        assert len(queries) == 1
+        assert ctx.error == "GL_NO_ERROR"
+    finally:
+        ctx.release()
