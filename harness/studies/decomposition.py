@@ -26,7 +26,8 @@ Steps (each a receiver map scored against the reference on receiver 0):
    unresolved (lost, diverged, unconverged) never met the method's own tests of the
    segment to its hit (a reflected ray meeting its object again is tested at the
    estimate), so its exact hit takes the exact chain's answer: an object on the
-   segment drops it (status ``reentered``), as the method drops it.
+   segment, beyond its first two grid texel widths as in the method's test, drops
+   it (status ``reentered``), as the method drops it.
 4. ``estimated hits``: the method itself, receiver hits from the preset's estimator
    and iteration count (its own render). With rim patches (``rim_patches`` > 1), the
    method's grid records alone, re-splatted: the method without its patches;
@@ -82,6 +83,8 @@ from harness.studies.runner import CAMERA_PASSES, RealtimeRunner
 from harness.studies.timing import MIN_REPEATS, median_seconds
 from renderers.caustics_mapping.caustic_trace import STATUS
 from renderers.caustics_mapping.footprint import FALLBACK_TEXELS
+from renderers.caustics_mapping.lights import light_setups
+from renderers.caustics_mapping.presets import resolve_settings
 from renderers.caustics_mapping.record_splat import SplattedMaps, splat_records, split_records
 from reports.decomposition_records import DECOMPOSITION_COLUMNS, DecompositionRecord
 from reports.display import luminance
@@ -226,8 +229,10 @@ def image_space_records(hits: dict[str, np.ndarray], tracer: SurfaceTracer, scen
     dropped = np.zeros_like(ok)
     if blockers is not None:
         check = ok & (status[traced] != STATUS["hit"])
-        dropped[check] = _blocked(blockers, origin[traced][check], found.position[check],
-                                  found.geometric_normal[check])
+        rows = np.flatnonzero(traced)[check]
+        skip = 2.0 * _texel_widths(scene, geometry, hits, rows, origin[rows])
+        dropped[check] = _blocked(blockers, origin[rows], found.position[check],
+                                  found.geometric_normal[check], skip=skip)
         ok &= ~dropped
     out = {k: np.array(v, copy=True) for k, v in hits.items()}
     idx = np.flatnonzero(traced)
@@ -246,16 +251,39 @@ def image_space_records(hits: dict[str, np.ndarray], tracer: SurfaceTracer, scen
 
 
 def _blocked(blockers: SurfaceTracer, origin: np.ndarray, hit: np.ndarray,
-             receiver_normal: np.ndarray) -> np.ndarray:
-    """Whether an object lies on each segment from ``origin`` (on an object, m) to its
-    receiver ``hit`` (m): a ray cast back from the hit towards the origin, spawned off
-    the receiver (``receiver_normal``: its geometric normal there), meets an object
-    before the origin's own surface, that is short of the segment's length by more
-    than 0.1 % (float32 hits land within about 1e-6 of it relative)."""
+             receiver_normal: np.ndarray, *, skip: np.ndarray) -> np.ndarray:
+    """Whether an object lies on each segment from ``origin`` (on an object's
+    image-space surface, m) to its receiver ``hit`` (m), farther than ``skip`` (m)
+    from the origin: a ray cast back from the hit towards the origin, spawned off the
+    receiver (``receiver_normal``: its geometric normal there), meets an object
+    first. The origin is read from the light's textures, so it lies off the mesh by
+    up to about a texel; the method's own test skips the segment's first two texel
+    widths for the same reason, and so does this one."""
     segment = origin - hit
     length = np.linalg.norm(segment, axis=1)
     back = blockers(hit, segment / length[:, None], leaving=receiver_normal)
-    return (back.kind == SurfaceTracer.OBJECT) & (back.distance < length * (1.0 - 1e-3))
+    return (back.kind == SurfaceTracer.OBJECT) & (back.distance < length - skip)
+
+
+def _texel_widths(scene: Scene, geometry, hits: dict[str, np.ndarray], rows: np.ndarray,
+                  origin: np.ndarray) -> np.ndarray:
+    """The width (m) of one grid texel of each record's object view at its origin, as
+    the trace's ``reflection_blocked`` takes it: the view's larger extent over the grid,
+    times the distance from the light for a perspective view."""
+    settings = resolve_settings(scene.settings)
+    lights = light_setups(scene, geometry, frustum_fit=settings.frustum)
+    light = np.asarray(hits["light"])[rows]
+    view = np.asarray(hits["view"])[rows]
+    widths = np.empty(len(rows))
+    for li, vi in set(zip(light.tolist(), view.tolist(), strict=True)):
+        setup = lights[li]
+        frustum = setup.object_views[vi]
+        x0, x1, y0, y1 = frustum.bounds
+        here = (light == li) & (view == vi)
+        widths[here] = max(x1 - x0, y1 - y0) / settings.grid
+        if frustum.perspective:
+            widths[here] *= np.linalg.norm(origin[here] - setup.position, axis=1)
+    return widths
 
 
 def _water_absorption(scene: Scene, geometry) -> np.ndarray | None:
