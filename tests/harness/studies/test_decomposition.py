@@ -188,22 +188,26 @@ def test_image_space_step_drops_unresolved_rays_an_object_blocks():
     """Regression lock: in the image-space step, a ray the method left unresolved
     whose exact receiver hit lies behind an object is dropped as ``reentered``. The
     method never tested that segment. A ray it verified keeps its exact hit, since
-    its own tests had their say; so does an unblocked ray. Without ``blockers``,
-    every exact hit is kept, as before. glass_sphere: sphere of radius 1 at z = 2
-    over the floor z = 0. Rays leave the sphere's top straight down, through the
-    sphere (blocked), and its side (x = 1) outwards and down to (2.5, 0, 0)."""
+    its own tests had their say; so does an unblocked ray, and so does a ray whose
+    origin (read from the light's textures) lies 5 mm inside the mesh, which it
+    leaves within the first two grid texel widths (about 3 cm here) that the method's
+    own test skips too. Without ``blockers``, every exact hit is kept, as before.
+    glass_sphere: sphere of radius 1 at z = 2 over the floor z = 0. Rays leave the
+    sphere's top straight down, through the sphere (blocked), and its side (x = 1,
+    and x = 0.995 inside) outwards and down to the floor."""
     scene = _glass_sphere()
     geometry = build_geometry(scene)
-    top, side = [0.0, 0.0, 3.0], [1.0, 0.0, 2.0]
+    top, side, inside = [0.0, 0.0, 3.0], [1.0, 0.0, 2.0], [0.995, 0.0, 2.0]
     down, out = [0.0, 0.0, -1.0], [0.6, 0.0, -0.8]
     unconverged, hit = STATUS["unconverged"], STATUS["hit"]
-    hits = {"origin": np.array([top, top, side], np.float32),
-            "direction": np.array([down, down, out], np.float32),
-            "status": np.array([unconverged, hit, unconverged], np.int32),
-            "view": np.zeros(3, np.int32), "distance": np.full(3, 2.0, np.float32),
-            "hit": np.zeros((3, 3), np.float32), "flux": np.ones((3, 3), np.float32),
-            "receiver": np.zeros(3, np.int32), "normal": np.zeros((3, 3), np.float32),
-            "light": np.zeros(3, np.int32), "channel": np.zeros(3, np.int32)}
+    n = 4
+    hits = {"origin": np.array([top, top, side, inside], np.float32),
+            "direction": np.array([down, down, out, out], np.float32),
+            "status": np.array([unconverged, hit, unconverged, unconverged], np.int32),
+            "view": np.zeros(n, np.int32), "distance": np.full(n, 2.0, np.float32),
+            "hit": np.zeros((n, 3), np.float32), "flux": np.ones((n, 3), np.float32),
+            "receiver": np.zeros(n, np.int32), "normal": np.zeros((n, 3), np.float32),
+            "light": np.zeros(n, np.int32), "channel": np.zeros(n, np.int32)}
     receivers = SurfaceTracer(scene, geometry, objects=False)
     blockers = SurfaceTracer(scene, geometry)
 
@@ -212,9 +216,10 @@ def test_image_space_step_drops_unresolved_rays_an_object_blocks():
         return records[:, 2, 3].astype(int).tolist(), records[:, 2, :3]
 
     status, where = statuses(blockers=blockers)
-    assert status == [STATUS["reentered"], hit, hit]
-    np.testing.assert_allclose(where[1:], [[0.0, 0.0, 0.0], [2.5, 0.0, 0.0]], atol=1e-5)
-    assert statuses()[0] == [hit, hit, hit]
+    assert status == [STATUS["reentered"], hit, hit, hit]
+    np.testing.assert_allclose(where[1:], [[0.0, 0.0, 0.0], [2.5, 0.0, 0.0],
+                                           [2.495, 0.0, 0.0]], atol=1e-5)
+    assert statuses()[0] == [hit] * n
 
 
 def test_expected_noise_floor_is_what_independent_draws_score():
