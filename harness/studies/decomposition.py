@@ -226,16 +226,16 @@ def image_space_records(hits: dict[str, np.ndarray], tracer: SurfaceTracer, scen
     found = tracer(origin[traced], direction[traced])
     front = np.einsum("ij,ij->i", direction[traced], found.shading_normal) < 0
     ok = (found.kind == SurfaceTracer.RECEIVER) & front
+    idx = np.flatnonzero(traced)
     dropped = np.zeros_like(ok)
     if blockers is not None:
         check = ok & (status[traced] != STATUS["hit"])
-        rows = np.flatnonzero(traced)[check]
+        rows = idx[check]
         skip = 2.0 * _texel_widths(scene, geometry, hits, rows, origin[rows])
         dropped[check] = _blocked(blockers, origin[rows], found.position[check],
                                   found.geometric_normal[check], skip=skip)
         ok &= ~dropped
     out = {k: np.array(v, copy=True) for k, v in hits.items()}
-    idx = np.flatnonzero(traced)
     out["status"][idx] = np.where(ok, STATUS["hit"],
                                   np.where(dropped, STATUS["reentered"], STATUS["lost"]))
     out["hit"][idx] = np.where(ok[:, None], found.position, origin[traced])

@@ -57,8 +57,9 @@ def test_main_fails_on_missing_chromium_only_on_ci(monkeypatch, tmp_path, capsys
 @pytest.mark.parametrize(("cuda", "code"), [(False, 1), (True, 0)])
 def test_main_without_libllvm_fails_unless_a_cuda_device_is_present(monkeypatch, capsys,
                                                                     cuda, code):
-    """Without libLLVM, setup fails, except where a CUDA device is present: Mitsuba then
-    traces on cuda_ad_rgb, and the warning says llvm_ad_rgb is unavailable."""
+    """Regression lock: without libLLVM, setup fails, except where a CUDA device is
+    present: Mitsuba then traces on cuda_ad_rgb, and the warning says llvm_ad_rgb is
+    unavailable."""
     def missing(install):
         raise apt.SystemSetupError("no libLLVM; run: apt-get install -y libllvm19")
 

@@ -183,7 +183,7 @@ def test_glass_sphere_decomposes_as_measured(glass):
     assert FIG10_CLAIM not in glass["paper"].claims    # a sphere is not the paper's case
 
 
-@pytest.mark.physical_requirement
+@pytest.mark.regression_lock
 def test_image_space_step_drops_unresolved_rays_an_object_blocks():
     """Regression lock: in the image-space step, a ray the method left unresolved
     whose exact receiver hit lies behind an object is dropped as ``reentered``. The
@@ -222,6 +222,7 @@ def test_image_space_step_drops_unresolved_rays_an_object_blocks():
     assert statuses()[0] == [hit] * n
 
 
+@pytest.mark.physical_requirement
 def test_expected_noise_floor_is_what_independent_draws_score():
     """Two independent means of per-texel variance σ² score, against each other,
     relMSE ≈ mean(2 σ² / (ref² + ε)) (the noise floor the figures use). Checked on

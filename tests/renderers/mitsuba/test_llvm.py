@@ -58,7 +58,7 @@ def test_install_is_attempted_as_root(monkeypatch):
 
 #: Loads Mitsuba with the libLLVM set-up replaced by a failure (and, with argument
 #: ``auto``, as on a GPU machine without libLLVM: none found, a CUDA device reported).
-_FORCED_CUDA = """
+_LOAD_WITHOUT_LIBLLVM = """
 import sys
 import renderers.mitsuba._mi as m
 def asked(**kwargs):
@@ -82,7 +82,7 @@ def test_forced_cuda_variant_asks_for_no_libllvm():
     Run in a fresh process, so this process's variant stays as it is."""
     env = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH"}
     env["CAUSTICS_MITSUBA_VARIANT"] = "cuda_ad_rgb"
-    proc = subprocess.run([sys.executable, "-c", _FORCED_CUDA], env=env, text=True,
+    proc = subprocess.run([sys.executable, "-c", _LOAD_WITHOUT_LIBLLVM], env=env, text=True,
                           capture_output=True, timeout=300, check=False)
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout.strip().splitlines()[-1]
@@ -98,7 +98,7 @@ def test_choice_by_device_asks_for_no_libllvm_where_none_is_found_beside_cuda():
     already has; on a GPU machine it takes cuda_ad_rgb."""
     env = {k: v for k, v in os.environ.items() if k != "CAUSTICS_MITSUBA_VARIANT"}
     env.setdefault("DRJIT_LIBLLVM_PATH", llvm.find_libllvm() or "")
-    proc = subprocess.run([sys.executable, "-c", _FORCED_CUDA, "auto"], env=env, text=True,
+    proc = subprocess.run([sys.executable, "-c", _LOAD_WITHOUT_LIBLLVM, "auto"], env=env, text=True,
                           capture_output=True, timeout=300, check=False)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip().splitlines()[-1] in ("loaded llvm_ad_rgb", "loaded cuda_ad_rgb")
