@@ -125,6 +125,14 @@ def _source(name: str) -> str:
     return expand(name)
 
 
+def _context_cache(ctx: moderngl.Context) -> dict:
+    """The dict kept in ``ctx.extra`` for what lives as long as the context (its
+    programs, timer query, idle framebuffer and resource pool), made on first use."""
+    if not isinstance(ctx.extra, dict):
+        ctx.extra = {}
+    return ctx.extra
+
+
 def load_program(
     ctx: moderngl.Context, name: str, *, defines: dict[str, object] | None = None,
     fragment: bool = True, compute: bool = False, geometry: bool = False,
@@ -147,8 +155,7 @@ def load_program(
     geometry : bool
         Whether the file has a ``GEOMETRY_SHADER`` section.
     """
-    cache = ctx.extra if isinstance(ctx.extra, dict) else {}
-    ctx.extra = cache
+    cache = _context_cache(ctx)
     key = ("program", name, tuple(sorted((defines or {}).items())), fragment, compute, geometry)
     if key in cache:
         return cache[key]
@@ -199,8 +206,7 @@ def _time_query(ctx: moderngl.Context) -> moderngl.Query:
     """The context's one ``GL_TIME_ELAPSED`` query, made on first use and reused by
     every pass (passes are timed one after another, never nested; moderngl's Query
     has no ``release``, so a query per pass would leak one GL object each)."""
-    cache = ctx.extra if isinstance(ctx.extra, dict) else {}
-    ctx.extra = cache
+    cache = _context_cache(ctx)
     if "time_query" not in cache:
         cache["time_query"] = ctx.query(time=True)
     return cache["time_query"]
@@ -240,8 +246,7 @@ def release_framebuffer(ctx: moderngl.Context, fbo: moderngl.Framebuffer) -> Non
     released one, GL reports GL_INVALID_OPERATION, so a pass never leaves a released
     framebuffer bound.
     """
-    cache = ctx.extra if isinstance(ctx.extra, dict) else {}
-    ctx.extra = cache
+    cache = _context_cache(ctx)
     if "idle_fbo" not in cache:
         cache["idle_fbo"] = ctx.framebuffer([ctx.renderbuffer((1, 1), 4)])
     cache["idle_fbo"].use()
@@ -338,8 +343,7 @@ class ResourcePool:
 
 def pool(ctx: moderngl.Context) -> ResourcePool:
     """The context's :class:`ResourcePool` (kept in ``ctx.extra``)."""
-    cache = ctx.extra if isinstance(ctx.extra, dict) else {}
-    ctx.extra = cache
+    cache = _context_cache(ctx)
     if "pool" not in cache:
         cache["pool"] = ResourcePool(ctx)
     return cache["pool"]
