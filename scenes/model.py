@@ -503,7 +503,14 @@ class Settings:
     normalization: Literal["radiometric", "paper"] = spec(
         "radiometric", doc="Flux per grid texel: physical, or the paper's Eq. 6."
     )
-    lowpass: bool = spec(False, doc="Low-pass filter the caustic map.")
+    lowpass: bool = spec(False, doc="Low-pass filter the caustic map the camera reads.")
+    caustic_lookup: Literal["light", "receivers"] | None = spec(
+        None, doc="Where the camera reads caustic irradiance: the light-space caustic map "
+        "(the paper's), or the receivers' (u, v) maps, drawn at 2 x `receiver_map` (their "
+        "2 x 2 means are the receiver maps scored), which makes the light-space map a "
+        "by-product drawn only for the `render` command's outputs "
+        "(preset: paper light, strong receivers).",
+    )
     receiver_map: Size2 = spec(
         (256, 256), doc="Receiver irradiance map resolution over (u, v).", unit="px",
         ge=2, le=8192,

@@ -3,11 +3,15 @@
 //
 // Receivers are Lambertian: L = albedo / pi * (E_direct * visibility + E_caustic),
 // E_direct only when the scene has direct lighting, visibility from the shadow map
-// only with the shadows effect, E_caustic looked up in the caustic map at the
-// fragment's projection into the light's view (like a shadow-map lookup). The
-// caustic map holds the irradiance of the receiver the light sees in that texel, so
-// it is used only where the positions atlas shows this very fragment (same receiver,
-// within three positions texels).
+// only with the shadows effect. E_caustic, u_caustic_lookup 0 (the paper's): looked
+// up in the caustic map at the fragment's projection into the light's view (like a
+// shadow-map lookup). The caustic map holds the irradiance of the receiver the light
+// sees in that texel, so it is used only where the positions atlas shows this very
+// fragment (same receiver, within three positions texels). u_caustic_lookup 1: read
+// in the receiver's own (u, v) map at the fragment's (u, v), which holds that
+// receiver's caustic irradiance wherever the light lands on it (no visibility test).
+// Receivers seen directly read it at the nearest texel, or bilinearly with
+// u_filtered (settings.lookup = "filtered").
 //
 // DEPTH_ONLY: the objects' depth pre-pass; the OBJECT variant then shades each
 // pixel once (depth test <=) instead of every object fragment drawn before the
@@ -38,6 +42,12 @@
 // above: direct light with the shadow test, and the caustic map read bilinearly
 // over the texels that show the same receiver.
 #include "common.glsl"
+#ifndef CAUSTIC_LOOKUP
+#define CAUSTIC_LOOKUP 0
+#endif
+#ifndef FILTERED
+#define FILTERED 0
+#endif
 #if defined VERTEX_SHADER
 invariant gl_Position;      // the DEPTH_ONLY pre-pass and the shading pass agree exactly
 #endif
@@ -56,6 +66,13 @@ uniform sampler2D u_caustic_map;   // RGBA32F: rgb E (W/m^2), a kernel weight
 uniform int u_caustic_size;
 uniform sampler2D u_positions;     // receiver positions atlas (layout in common.glsl)
 uniform int u_positions_size;
+uniform sampler2D u_receiver_maps; // RGBA32F atlas: receiver i's (u, v) map, rgb E (W/m^2),
+uniform ivec2 u_receiver_size;     // in the u_receiver_size (W, H) slot from column i * W
+uniform sampler2D u_receiver_triangles; // with u_triangles_scale > 0, the triangles'
+uniform int u_triangles_scale;     // part, in slots that many times finer per side
+uniform sampler2D u_receiver_uv;   // RGBA32F (receivers, 4): row 0 and 1 the affine (u, v)
+                                   // rows, 2 the (u, v) extent, 3 x: 1 if (u, v) is affine
+uniform sampler2D u_uvs;           // the positions atlas's companion: xy (u, v)
 // OBJECT variant
 uniform sampler2D u_receiver_normals;  // its companion: xyz unit receiver normal
 uniform sampler2D u_albedos;       // RGBA32F, (receivers, 1): rgb albedo of receiver i
@@ -64,7 +81,9 @@ uniform sampler2D u_back_normals;      // xyz unit outward normal
 uniform ivec2 u_viewport;          // camera image W, H (px)
 uniform float u_pixel_width;       // width of one pixel at unit distance (tangent)
 uniform int u_object;              // object index
-// Compile-time: OBJECT's MATERIAL (0 none: black, 1 closed dielectric, 2 open
+// Compile-time: CAUSTIC_LOOKUP (0: the caustic map, 1: the receivers' (u, v) maps),
+// FILTERED (1: bilinear reads, the receivers seen directly as well), and
+// OBJECT's MATERIAL (0 none: black, 1 closed dielectric, 2 open
 // dielectric, 3 conductor), DISPERSION (1: one path per channel), ALL_PATHS (1:
 // TIR reflects, else it ends the chain), FILTERED (1: bilinear reads within one
 // surface), and the estimator's ESTIMATOR and SAFEGUARDED (surface_estimate.glsl).
@@ -123,16 +142,66 @@ vec3 caustic_filtered(int face, vec2 ndc, int receiver) {
     return texelFetch(u_caustic_map, map_texel(face, ndc, size), 0).rgb;
 }
 
+#if CAUSTIC_LOOKUP == 1
+// Slot `slot` (size texels, from column slot * size.x) of atlas `map` at pixel
+// coordinates pix (0 <= pix <= size): the nearest texel or, `filtered`, bilinear over
+// the four around (clamped to the slot's edge texels).
+vec3 slot_read(sampler2D map, ivec2 size, int slot, vec2 pix, bool filtered) {
+    ivec2 base = ivec2(slot * size.x, 0);
+    if (!filtered) return texelFetch(map, base + min(ivec2(pix), size - 1), 0).rgb;
+    vec2 q = clamp(pix - 0.5, vec2(0.0), vec2(size - 1));
+    ivec2 i0 = min(ivec2(floor(q)), max(size - 2, ivec2(0)));
+    vec2 f = q - vec2(i0);
+    vec3 a = mix(texelFetch(map, base + i0, 0).rgb,
+                 texelFetch(map, base + i0 + ivec2(1, 0), 0).rgb, f.x);
+    vec3 b = mix(texelFetch(map, base + i0 + ivec2(0, 1), 0).rgb,
+                 texelFetch(map, base + i0 + ivec2(1, 1), 0).rgb, f.x);
+    return mix(a, b, f.y);
+}
+
+// Receiver `receiver`'s (u, v) map at point x of it (projected into the light's
+// views at (face, ndc); found: it has one), plus its finer triangles' part: each
+// read by slot_read. The (u, v) is affine in x, or (a mesh) the one the positions
+// atlas stores at x's texel, where that texel shows this receiver (else no caustic
+// is read).
+vec3 caustic_uv(vec3 x, int receiver, bool filtered, int face, vec2 ndc, bool found) {
+    vec2 uv;
+    if (texelFetch(u_receiver_uv, ivec2(receiver, 3), 0).x > 0.5) {
+        uv = vec2(dot(texelFetch(u_receiver_uv, ivec2(receiver, 0), 0), vec4(x, 1.0)),
+                  dot(texelFetch(u_receiver_uv, ivec2(receiver, 1), 0), vec4(x, 1.0)));
+    } else {
+        if (!found) return vec3(0.0);
+        ivec2 t = map_texel(face, ndc, u_positions_size);
+        if (int(texelFetch(u_positions, t, 0).w + 0.5) - 1 != receiver) return vec3(0.0);
+        uv = texelFetch(u_uvs, t, 0).xy;
+    }
+    vec4 extent = texelFetch(u_receiver_uv, ivec2(receiver, 2), 0);   // umin umax vmin vmax
+    vec2 at = (uv - extent.xz) / vec2(extent.y - extent.x, extent.w - extent.z);
+    if (any(lessThan(at, vec2(0.0))) || any(greaterThan(at, vec2(1.0)))) return vec3(0.0);
+    vec3 e = slot_read(u_receiver_maps, u_receiver_size, receiver,
+                       at * vec2(u_receiver_size), filtered);
+    if (u_triangles_scale > 0) {
+        ivec2 fine = u_triangles_scale * u_receiver_size;
+        e += slot_read(u_receiver_triangles, fine, receiver, at * vec2(fine), filtered);
+    }
+    return e;
+}
+#endif
+
 // Irradiance (W/m^2) at point x (unit normal n) of receiver `receiver`: the direct
-// light, shadow-tested, plus the caustic map where the light's positions atlas shows
-// x itself (the same receiver, within three positions texels), read at the nearest
+// light, shadow-tested, plus the caustic irradiance: from the receiver's (u, v) map
+// (caustic_uv), or from the caustic map where the light's positions atlas shows x
+// itself (the same receiver, within three positions texels), read at the nearest
 // texel or, `filtered`, by caustic_filtered. One projection into the light's views
-// serves the three map lookups.
+// serves the map lookups.
 vec3 receiver_irradiance(vec3 x, vec3 n, int receiver, bool filtered) {
     int face;
     vec2 ndc;
     bool found = map_project(x, face, ndc);
     vec3 e = direct_part(x, n, face, ndc, found);
+#if CAUSTIC_LOOKUP == 1
+    if (u_caustics == 1) e += caustic_uv(x, receiver, filtered, face, ndc, found);
+#else
     if (u_caustics == 1 && found) {
         vec4 p = texelFetch(u_positions, map_texel(face, ndc, u_positions_size), 0);
         float tol = 3.0 * sqrt(map_texel_area(x, n, ndc, u_positions_size));
@@ -141,17 +210,19 @@ vec3 receiver_irradiance(vec3 x, vec3 n, int receiver, bool filtered) {
             else e += texelFetch(u_caustic_map, map_texel(face, ndc, u_caustic_size), 0).rgb;
         }
     }
+#endif
     return e;
 }
 
 // Radiance (W m^-2 sr^-1) of a receiver drawn directly (albedo `albedo`).
 vec3 receiver_radiance(vec3 x, vec3 n, vec3 albedo, int receiver) {
-    return albedo / PI * receiver_irradiance(x, n, receiver, false);
+    return albedo / PI * receiver_irradiance(x, n, receiver, FILTERED == 1);
 }
 
 #if defined FRAGMENT_SHADER && defined OBJECT
 // Radiance (W m^-2 sr^-1) of receiver `receiver` at point y, normal n, seen
-// through the object: as for receivers seen directly, the caustic map filtered.
+// through the object: as for receivers seen directly, the caustic map always read
+// bilinearly.
 vec3 hit_radiance(vec3 y, vec3 n, int receiver) {
     return texelFetch(u_albedos, ivec2(receiver, 0), 0).rgb / PI
         * receiver_irradiance(y, n, receiver, true);

@@ -2,13 +2,15 @@
 at the top of the image.
 
 Receivers seen directly are shaded from the light's maps (direct light with the
-shadow test, the caustic map). A caustic object is seen along the event chain the
-photon tracer counts through it, traced from the eye (``camera.glsl`` states the
-maths): one reflection (conductor), one refraction (water surface), or two (closed
-dielectric: the exit is estimated in the back faces from the camera of pass 5a,
-:mod:`.camera_backfaces`, after Wyman 2005), with Fresnel, absorption and dispersion
-as the effects say. The ray leaving the object meets the receivers where the preset's
-estimator finds the hit in the light's receiver positions atlas.
+shadow test) and from the caustic map: the light-space one (the paper's), or each
+receiver's own (u, v) map (``caustic_lookup = "receivers"``). A caustic object is
+seen along the event chain the photon tracer counts through it, traced from the eye
+(``camera.glsl`` states the maths): one reflection (conductor), one refraction (water
+surface), or two (closed dielectric: the exit is estimated in the back faces from the
+camera of pass 5a, :mod:`.camera_backfaces`, after Wyman 2005), with Fresnel,
+absorption and dispersion as the effects say. The ray leaving the object meets the
+receivers where the preset's estimator finds the hit in the light's receiver
+positions atlas.
 
 Why the light's atlas and not receivers rendered from the camera: it exists already,
 it shows the receivers under the object (the object is not drawn in it), and the
@@ -38,6 +40,7 @@ for the receiver hit alike):
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import moderngl
@@ -49,6 +52,7 @@ from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup, look_at
 from renderers.caustics_mapping.meshes import GpuMesh
 from renderers.caustics_mapping.receiver_positions import ReceiverPositions
+from renderers.caustics_mapping.receiver_splat import UvMapping
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
 from scenes.camera import half_fov_tangents
 from scenes.geometry import SceneGeometry
@@ -86,7 +90,17 @@ class CameraInputs:
     shadow_map : moderngl.Texture or None
         RG32F shadow-map atlas (``shadow_map.glsl``), ``shadow_size`` texels per face.
     caustic_map : moderngl.Texture or None
-        RGBA32F caustic-map atlas, rgb irradiance (W/m^2), ``caustic_size`` per face.
+        RGBA32F caustic-map atlas, rgb irradiance (W/m^2), ``caustic_size`` per face;
+        None where the camera reads ``receiver_maps`` instead (or nothing).
+    receiver_maps : moderngl.Texture or None
+        With ``caustic_lookup = "receivers"``: RGBA32F atlas of the receivers' (u, v)
+        maps, rgb irradiance (W/m^2), receiver i in the ``receiver_size`` = (W, H)
+        slot from column i * W (:func:`.splat_maps.splat_maps`).
+    receiver_triangles : moderngl.Texture or None
+        Their triangles' part, drawn apart in an atlas of finer slots (a whole
+        multiple of ``receiver_size``); the camera reads the sum of the two.
+    uv_mappings : sequence of UvMapping
+        Each receiver's (u, v) as a function of position (with ``receiver_maps``).
     positions : ReceiverPositions
         The light's receiver positions, normals (and (u, v)) atlases.
     back : CameraBackFaces or None
@@ -112,6 +126,10 @@ class CameraInputs:
     caustic_map: moderngl.Texture | None
     caustic_size: int
     positions: ReceiverPositions
+    receiver_maps: moderngl.Texture | None = None
+    receiver_triangles: moderngl.Texture | None = None
+    receiver_size: tuple[int, int] = (0, 0)
+    uv_mappings: Sequence[UvMapping] = ()
     back: CameraBackFaces | None
     materials: MaterialTable
     options: TraceOptions
@@ -130,6 +148,21 @@ def _albedo_table(ctx: moderngl.Context, geometry: SceneGeometry) -> moderngl.Te
     return table
 
 
+def _uv_table(ctx: moderngl.Context, geometry: SceneGeometry,
+              mappings: Sequence[UvMapping]) -> moderngl.Texture:
+    """RGBA32F (receivers, 4) (a pooled texture): per receiver its affine (u, v) rows,
+    its (u, v) extent (umin, umax, vmin, vmax) and 1 where (u, v) is affine
+    (``camera.glsl``, ``u_receiver_uv``)."""
+    table = np.zeros((4, len(geometry.receivers), 4), np.float32)
+    for i, (mapping, receiver) in enumerate(zip(mappings, geometry.receivers, strict=True)):
+        table[0, i], table[1, i] = mapping.rows
+        table[2, i] = receiver.extent
+        table[3, i, 0] = float(mapping.affine)
+    texture = pool(ctx).texture((len(geometry.receivers), 4))
+    texture.write(table.tobytes())
+    return texture
+
+
 def _set_common(program: moderngl.Program, light: LightSetup, camera: Camera,
                 inputs: CameraInputs) -> None:
     set_light_uniforms(program, light)
@@ -137,7 +170,12 @@ def _set_common(program: moderngl.Program, light: LightSetup, camera: Camera,
     set_uniform(program, "u_eye", tuple(float(x) for x in camera.position))
     set_uniform(program, "u_direct", int(inputs.direct))
     set_uniform(program, "u_shadows", int(inputs.shadow_map is not None))
-    set_uniform(program, "u_caustics", int(inputs.caustic_map is not None))
+    receivers = inputs.receiver_maps is not None
+    set_uniform(program, "u_caustics", int(inputs.caustic_map is not None or receivers))
+    set_uniform(program, "u_receiver_size", tuple(int(x) for x in inputs.receiver_size))
+    fine = inputs.receiver_triangles
+    set_uniform(program, "u_triangles_scale",
+                fine.size[1] // inputs.receiver_size[1] if fine is not None else 0)
     set_uniform(program, "u_shadow_size", inputs.shadow_size)
     set_uniform(program, "u_shadow_bias", inputs.shadow_bias)
     set_uniform(program, "u_caustic_size", inputs.caustic_size)
@@ -177,6 +215,8 @@ def render_camera(
     color = resources.texture((w, h))
     depth = resources.depth_texture((w, h))
     albedos = _albedo_table(ctx, geometry)
+    uv_table = _uv_table(ctx, geometry, inputs.uv_mappings) \
+        if inputs.receiver_maps is not None else None
     fbo = resources.framebuffer([color], depth)
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
@@ -188,22 +228,31 @@ def render_camera(
                 ("u_positions", inputs.positions.positions),
                 ("u_receiver_normals", inputs.positions.normals), ("u_albedos", albedos),
                 ("u_back_positions", back.positions if back else None),
-                ("u_back_normals", back.normals if back else None))
+                ("u_back_normals", back.normals if back else None),
+                ("u_receiver_maps", inputs.receiver_maps),
+                ("u_receiver_triangles", inputs.receiver_triangles), ("u_receiver_uv", uv_table),
+                ("u_uvs", inputs.positions.uvs))
     for unit, (_, tex) in enumerate(textures):
         if tex is not None:
             tex.use(location=unit)
 
-    def program_for(defines: dict[str, int] | None) -> moderngl.Program:
-        program = load_program(ctx, "camera.glsl", defines=defines)
+    table, options = inputs.materials, inputs.options
+    # Compile-time, like the object's material (camera.glsl): which caustic map is
+    # read, and how.
+    lookup = {"CAUSTIC_LOOKUP": int(inputs.receiver_maps is not None),
+              "FILTERED": int(options.filtered)}
+
+    def program_for(defines: dict[str, int]) -> moderngl.Program:
+        program = load_program(ctx, "camera.glsl", defines=lookup | defines)
         _set_common(program, light, camera, inputs)
         for unit, (name, tex) in enumerate(textures):
             if tex is not None:
                 set_uniform(program, name, unit)
-        if defines:
+        if "OBJECT" in defines:
             _set_object(program, camera, inputs, ray_scale)
         return program
 
-    receiver_program = program_for(None)
+    receiver_program = program_for({})
     for index, (mesh, geo) in enumerate(zip(receivers, geometry.receivers, strict=False)):
         set_uniform(receiver_program, "u_receiver", index)
         set_uniform(receiver_program, "u_albedo", tuple(float(x) for x in geo.albedo))
@@ -223,12 +272,10 @@ def render_camera(
         vao.render(moderngl.TRIANGLES)
         vao.release()
     ctx.depth_func = "<="
-    table, options = inputs.materials, inputs.options
     for index, mesh in enumerate(objects):
         program = program_for({"OBJECT": 1, "MATERIAL": table.code[index],
                                "DISPERSION": int(inputs.dispersion),
                                "ALL_PATHS": int(inputs.all_paths),
-                               "FILTERED": int(options.filtered),
                                "ESTIMATOR": ESTIMATORS[options.estimator],
                                "SAFEGUARDED": int(options.safeguarded)})
         set_uniform(program, "u_object", index)
@@ -242,6 +289,7 @@ def render_camera(
         vao.release()
     ctx.depth_func = "<"
     image = np.frombuffer(color.read(), np.float32).reshape(h, w, 4)[::-1, :, :3].copy()
-    for texture in (color, depth, albedos):
-        resources.give_back(texture)
+    for texture in (color, depth, albedos, uv_table):
+        if texture is not None:
+            resources.give_back(texture)
     return image

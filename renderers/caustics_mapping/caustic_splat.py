@@ -19,7 +19,8 @@ from renderers.caustics_mapping.context import load_program, pool
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.uniforms import set_light_uniforms, set_uniform
 
-__all__ = ["SPLAT_MODES", "SplatOptions", "draw_splats", "splat_caustic_map"]
+__all__ = ["SPLAT_MODES", "SplatOptions", "TrianglesApart", "draw_splats",
+           "splat_caustic_map"]
 
 #: Kernel names and their shader codes (``splat_kernels.glsl``).
 SPLAT_MODES = {"points": 0, "footprint": 1, "triangles": 2}
@@ -29,6 +30,28 @@ MAX_TRIANGLE_PX = 64.0
 #: axis-aligned ones (``splat_kernels.glsl``): the same pixels get a share, fewer are
 #: visited. False draws every kernel axis-aligned (tests compare the two).
 TIGHT_BOXES = True
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class TrianglesApart:
+    """Triangles drawn into a target ``scale`` times finer per side than the
+    Gaussians' (whose pixels decide which quads are triangles: ``u_max_triangle``
+    and the rim-sliver length scale with it, so the same quads are drawn).
+
+    Attributes
+    ----------
+    scale : int
+    uniforms : callable
+        ``uniforms(program)`` sets the finer target's uniforms on the triangles'
+        programs (after the pass's own).
+    target : callable
+        ``target(kind)`` binds the framebuffer for ``"triangles"`` or
+        ``"gaussians"`` before a trace's kernels of that kind are drawn.
+    """
+
+    scale: int
+    uniforms: Callable[[moderngl.Program], None]
+    target: Callable[[str], None]
 
 
 @dataclass(frozen=True)
@@ -63,11 +86,12 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
                 *, max_radius: float, uniforms: Callable[[moderngl.Program], None],
                 passes: int = 1,
                 before_pass: Callable[[int, list[moderngl.Program]], None] | None = None,
-                ) -> None:
+                triangles_apart: TrianglesApart | None = None) -> None:
     """Draw every trace's kernels with program ``name`` into the bound framebuffer,
     additively. ``uniforms(program)`` sets the pass's own uniforms;
     ``before_pass(k, programs)`` runs before each of ``passes`` repeats (the caustic
-    map's faces).
+    map's faces); ``triangles_apart``: the triangles go to a finer target of their own
+    (:class:`TrianglesApart`).
     """
     gaussians = load_program(ctx, name)
     # The records that have a Gaussian are listed (flags, then a one-group scan), set
@@ -95,6 +119,12 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
         set_uniform(program, "u_cut", float(options.cut))
         set_uniform(program, "u_max_radius", float(max_radius))
         set_uniform(program, "u_tight_boxes", int(TIGHT_BOXES))
+        set_uniform(program, "u_px_scale", 1.0)
+    if stages and triangles_apart is not None:
+        for program in programs[-3:]:          # the quad and corner stages, the draw
+            triangles_apart.uniforms(program)
+            set_uniform(program, "u_max_triangle", MAX_TRIANGLE_PX * triangles_apart.scale)
+            set_uniform(program, "u_px_scale", float(triangles_apart.scale))
     ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
     ctx.enable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
     ctx.blend_func = moderngl.ONE, moderngl.ONE
@@ -135,6 +165,8 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
             if triangles is not None:
                 # The triangles first: they record which quads they draw, and a
                 # vertex's Gaussian carries the quarters of the others.
+                if triangles_apart is not None:
+                    triangles_apart.target("triangles")
                 for binding, buffer in enumerate(buffers, start=1):
                     buffer.bind_to_storage_buffer(binding)
                 for stage, count in zip(stages, (quads, trace.count), strict=True):
@@ -142,6 +174,8 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
                     stage.run(group_x=-(-count // 64))
                     ctx.memory_barrier()
                 triangles.render(moderngl.POINTS, vertices=quads)
+            if triangles_apart is not None:
+                triangles_apart.target("gaussians")
             for binding, buffer in zip((5, 6, 7, 9, 10, 11, 12), splats, strict=True):
                 buffer.bind_to_storage_buffer(binding)
             for program in (flags, listing):

@@ -2,7 +2,8 @@
 
 For each point sample of the light: receiver positions from the light, object
 surfaces (front; back for double refraction), one caustic trace per channel, the
-caustic map (optionally low-passed) and the receivers' (u, v) maps, the shadow map,
+caustic maps (:mod:`.splat_maps`: the receivers' (u, v) maps and the map the camera
+reads, optionally low-passed), the shadow map,
 the back faces from the camera (once per frame, for double refraction) and the
 camera pass. Each pass is a module of its own with its GLSL beside it;
 this module only orders them and keeps the sums (:class:`Accumulator`).
@@ -21,7 +22,6 @@ from renderers.caustics_mapping.camera_backfaces import (
     CameraBackFaces,
     render_camera_backfaces,
 )
-from renderers.caustics_mapping.caustic_splat import SplatOptions, splat_caustic_map
 from renderers.caustics_mapping.caustic_trace import (
     Trace,
     material_table,
@@ -30,13 +30,11 @@ from renderers.caustics_mapping.caustic_trace import (
 )
 from renderers.caustics_mapping.context import PassTimer, pool
 from renderers.caustics_mapping.estimators import MapLookup
-from renderers.caustics_mapping.footprint import FALLBACK_TEXELS, mean_hit_spacing_texels
 from renderers.caustics_mapping.lights import LightSetup
-from renderers.caustics_mapping.lowpass import lowpass_filter
 from renderers.caustics_mapping.meshes import convex, upload_mesh
 from renderers.caustics_mapping.object_positions import render_object_surfaces
 from renderers.caustics_mapping.receiver_positions import render_receiver_positions
-from renderers.caustics_mapping.receiver_splat import splat_receiver_map, uv_mapping
+from renderers.caustics_mapping.receiver_splat import uv_mapping
 from renderers.caustics_mapping.rim_patches import (
     RimPatches,
     find_rim_patches,
@@ -44,6 +42,7 @@ from renderers.caustics_mapping.rim_patches import (
     patch_shares,
 )
 from renderers.caustics_mapping.shadow_map import render_shadow_map
+from renderers.caustics_mapping.splat_maps import read_rgba, splat_maps
 from scenes import Scene
 from scenes.geometry import SceneGeometry
 
@@ -186,11 +185,6 @@ def _paths(scene: Scene, effects: tuple[str, ...]) -> str:
                     if e in effects)
 
 
-def _read_rgba(texture: moderngl.Texture) -> np.ndarray:
-    w, h = texture.size
-    return np.frombuffer(texture.read(), np.float32).reshape(h, w, 4)
-
-
 def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: int,
                         want_lookups: bool, want_atlas: bool) -> None:
     """Every pass for one light sample, summed into ``state.acc``; resources go back
@@ -214,7 +208,7 @@ def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: i
             rect=light.map_views[0].bounds, perspective=light.map_views[0].perspective))
     front, back, traces, (rim, patches) = _trace_objects(state, light, positions=positions)
     caustic = splat_maps(state, light, faces=faces, traces=traces + patches,
-                         positions=positions)
+                         positions=positions, light_map=want_atlas)
     shadow = None
     if "shadows" in state.effects:
         with timer.measure("shadow_map"):
@@ -222,9 +216,13 @@ def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: i
                                        faces=faces)
         acc.ran("shadow_map")
     diag = float(np.linalg.norm(np.ptp(setup.points, axis=0)))
+    reads_light = caustic.receivers is None
     inputs = CameraInputs(
-        shadow_map=shadow, shadow_size=s.shadow_map, caustic_map=caustic,
-        caustic_size=s.caustic_map, positions=positions, back=_camera_back(state),
+        shadow_map=shadow, shadow_size=s.shadow_map,
+        caustic_map=caustic.light if reads_light else None, caustic_size=s.caustic_map,
+        receiver_maps=caustic.receivers, receiver_triangles=caustic.triangles,
+        receiver_size=s.receiver_map,
+        uv_mappings=setup.mappings, positions=positions, back=_camera_back(state),
         materials=setup.materials, options=trace_options(s, setup.eps),
         direct=scene.info.direct_lighting, shadow_bias=1e-3 * diag,
         dispersion="dispersion" in state.effects, all_paths=s.all_specular_paths)
@@ -234,16 +232,16 @@ def render_light_sample(state: FrameState, sample: LightSetup, *, light_index: i
                                     inputs=inputs)
     acc.ran("camera")
     if want_atlas:
-        atlas = _read_rgba(caustic)[:, :, :3]
+        atlas = read_rgba(caustic.light)[:, :, :3]
         acc.caustic_total = atlas.copy() if acc.caustic_total is None \
             else acc.caustic_total + atlas
     _read_records(state, traces, rim, patches, light_index=light_index)
     for resource in (front, back, positions, rim, *patches):
         if resource is not None:
             resource.give_back(resources)
-    for texture in (caustic, shadow):
-        if texture is not None:
-            resources.give_back(texture)
+    caustic.give_back(resources)
+    if shadow is not None:
+        resources.give_back(shadow)
 
 
 def _read_records(state: FrameState, traces: list[Trace], rim: RimPatches | None,
@@ -348,44 +346,3 @@ def _trace_objects(state: FrameState, light: LightSetup, *, positions):
     if far is not None:
         far.give_back(pool(ctx))
     return front, back, traces, (rim, patches)
-
-
-def splat_maps(state: FrameState, light: LightSetup, *, faces: tuple[int, ...],
-                traces: list[Trace], positions) -> moderngl.Texture:
-    """Splat the traces into the caustic map (optionally low-passed) and into each
-    receiver's (u, v) map; returns the caustic-map texture (the camera reads it)."""
-    ctx, setup, acc, timer = state.ctx, state.setup, state.acc, state.timer
-    s = state.scene.settings
-    resources = pool(ctx)
-    csize = s.caustic_map
-    caustic = resources.texture((len(faces) * csize, csize))
-    with timer.measure("caustic_map"):
-        sigma = s.splat_sigma
-        if sigma is None and s.splat == "points":
-            grid_traces = [t for t in traces if not t.patches]
-            sigma = mean_hit_spacing_texels(grid_traces, light, grid=s.grid, caustic_size=csize)
-        elif sigma is None:
-            sigma = FALLBACK_TEXELS     # only Gaussians without neighbours use it
-        acc.splat_sigma.append(float(sigma))
-        options = SplatOptions(mode=s.splat, sigma=float(sigma), cut=s.splat_radius,
-                               footprint_scale=s.footprint_scale,
-                               unconverged=s.splat_unconverged, grid=s.grid)
-        splat_caustic_map(ctx, light, traces, caustic, size=csize, faces=faces,
-                          options=options)
-    acc.ran("caustic_map")
-    if s.lowpass:
-        with timer.measure("lowpass"):
-            filtered = lowpass_filter(ctx, caustic, size=csize)
-        resources.give_back(caustic)
-        caustic = filtered
-        acc.ran("lowpass")
-    with timer.measure("receiver_map"):
-        for index, rec in enumerate(state.geometry.receivers):
-            target = resources.texture(s.receiver_map)
-            splat_receiver_map(ctx, light, traces, target, index=index, receiver=rec,
-                               mapping=setup.mappings[index], positions=positions,
-                               caustic_size=csize, options=options)
-            acc.maps[index] += _read_rgba(target)[:, :, :3]
-            resources.give_back(target)
-    acc.ran("receiver_map")
-    return caustic

@@ -1,11 +1,12 @@
 // Optional low-pass filter of the caustic map (paper Section 3.6): a 3x3 binomial
-// kernel [1 2 1]^T [1 2 1] / 16, applied within each face of the atlas (texel
-// coordinates are clamped to the face, so faces do not bleed into each other).
-// Input and output: RGBA32F caustic-map atlas (rgb W/m^2, a splat weight).
+// kernel [1 2 1]^T [1 2 1] / 16, applied within each slot of the atlas (texel
+// coordinates are clamped to the slot, so slots do not bleed into each other).
+// Input and output: RGBA32F atlas (rgb W/m^2, a splat weight) of u_size slots side
+// by side: the caustic map's faces, or the receivers' (u, v) maps.
 #include "common.glsl"
 
 uniform sampler2D u_source;
-uniform int u_size;
+uniform ivec2 u_size;              // W, H texels of one slot
 
 #if defined VERTEX_SHADER
 void main() {
@@ -17,9 +18,9 @@ void main() {
 out vec4 out_color;
 void main() {
     ivec2 t = ivec2(gl_FragCoord.xy);
-    int face = t.x / u_size;
-    ivec2 lo = ivec2(face * u_size, 0);
-    ivec2 hi = ivec2(face * u_size + u_size - 1, u_size - 1);
+    int slot = t.x / u_size.x;
+    ivec2 lo = ivec2(slot * u_size.x, 0);
+    ivec2 hi = lo + u_size - 1;
     vec4 sum = vec4(0.0);
     for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {

@@ -1,4 +1,5 @@
-"""Optional pass: low-pass filter of the caustic map (``settings.lowpass``)."""
+"""Optional pass: low-pass filter of the caustic map the camera reads
+(``settings.lowpass``): the light-space atlas, or the receivers' (u, v) atlas."""
 
 from __future__ import annotations
 
@@ -11,10 +12,11 @@ __all__ = ["lowpass_filter"]
 
 
 def lowpass_filter(
-    ctx: moderngl.Context, source: moderngl.Texture, *, size: int
+    ctx: moderngl.Context, source: moderngl.Texture, *, size: tuple[int, int]
 ) -> moderngl.Texture:
-    """A 3x3 binomial blur of the caustic-map atlas ``source`` (RGBA32F), per face
-    (every texel is written; a texture of the context's pool)."""
+    """A 3x3 binomial blur of the atlas ``source`` (RGBA32F), per slot of ``size``
+    = (W, H) texels, the slots side by side (every texel is written; a texture of
+    the context's pool)."""
     resources = pool(ctx)
     target = resources.texture(source.size)
     fbo = resources.framebuffer([target])
@@ -22,7 +24,7 @@ def lowpass_filter(
     program = load_program(ctx, "lowpass.glsl")
     source.use(location=0)
     set_uniform(program, "u_source", 0)
-    set_uniform(program, "u_size", size)
+    set_uniform(program, "u_size", tuple(int(x) for x in size))
     ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND | moderngl.CULL_FACE)
     vao = ctx.vertex_array(program, [])
     vao.render(moderngl.TRIANGLES, vertices=3)

@@ -39,10 +39,10 @@ __all__ = ["PRESETS", "resolve_scene", "resolve_settings"]
 PRESETS: dict[str, dict[str, object]] = {
     "paper": {"estimator": "modified", "iterations": 3, "safeguarded": False,
               "lookup": "nearest", "frustum": "square", "verify_hits": False,
-              "splat": "points", "rim_patches": 1},
+              "splat": "points", "rim_patches": 1, "caustic_lookup": "light"},
     "strong": {"estimator": "secant", "iterations": 5, "safeguarded": True,
                "lookup": "filtered", "frustum": "tight", "verify_hits": True,
-               "splat": "triangles", "rim_patches": 3},
+               "splat": "triangles", "rim_patches": 3, "caustic_lookup": "receivers"},
 }
 _BACK_FACTOR = {"paper": 1, "strong": 4}
 #: strong's exit surface where every closed dielectric bounds a convex body: one

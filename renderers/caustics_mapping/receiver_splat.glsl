@@ -1,6 +1,7 @@
 // Pass 3c: splat the same trace records into one receiver's (u, v) irradiance map
-// (radiometric contract: W per m² of receiver surface), with the kernels of splat_kernels.glsl. Row 0
-// of the target is v = vmin, column 0 u = umin.
+// (radiometric contract: W per m² of receiver surface), with the kernels of splat_kernels.glsl. The
+// map is the receiver's slot of an atlas (viewport and scissor set to it; its first
+// column u_map_origin): row 0 is v = vmin, its column 0 u = umin.
 //
 // Output (RGBA32F, u_map_size texels): rgb caustic irradiance E (W/m^2 of receiver
 // surface, like the reference's photon tracer), a = kernel weight.
@@ -25,7 +26,8 @@ uniform vec4 u_row_u;
 uniform vec4 u_row_v;
 uniform float u_uv_per_metre;
 uniform vec4 u_extent;             // umin, umax, vmin, vmax
-uniform ivec2 u_map_size;          // W, H
+uniform ivec2 u_map_size;          // W, H of the receiver's slot
+uniform int u_map_origin;          // the slot's first column in the atlas (pixels)
 
 #include "splat_kernels.glsl"
 
@@ -44,19 +46,22 @@ vec2 uv_of(vec3 x) {
     return texelFetch(u_uv_texture, texel, 0).xy;
 }
 
-// The record's hit in map pixels, when it is splatted onto receiver u_receiver.
+// The record's hit in atlas pixels (its slot's from u_map_origin), when it is
+// splatted onto receiver u_receiver.
 bool to_target(int record, out vec2 pix) {
     pix = vec2(0.0);
     vec4 hit = splat_records[record * 5 + 2];
     float receiver = splat_records[record * 5 + 3].w;
     if (!splatted(hit.w, receiver) || int(receiver + 0.5) != u_receiver) return false;
     vec2 span = uv_span();
-    pix = (uv_of(hit.xyz) - u_extent.xz) / span * vec2(u_map_size);
+    pix = (uv_of(hit.xyz) - u_extent.xz) / span * vec2(u_map_size)
+        + vec2(float(u_map_origin), 0.0);
     return true;
 }
 
-vec4 target_position(vec2 pix) {
-    return vec4(pix / vec2(u_map_size) * 2.0 - 1.0, 0.0, 1.0);
+vec4 target_position(vec2 pix) {     // the viewport is the slot
+    vec2 slot_pix = pix - vec2(float(u_map_origin), 0.0);
+    return vec4(slot_pix / vec2(u_map_size) * 2.0 - 1.0, 0.0, 1.0);
 }
 
 // Surface area per (u, v) area at a point of unit normal n (see the header).
@@ -98,14 +103,15 @@ mat2 gaussian_covariance(int view, int tx, int ty, vec3 hit, vec3 normal, inout 
     map_locate(hit, u_caustic_size, face, ndc, texel);
     float metres = u_sigma * sqrt(map_texel_area(hit, normal, ndc, u_caustic_size));
     vec2 sigma = max(metres * u_uv_per_metre / span * size, vec2(0.5));
-    c = clamp(c, vec2(0.5), size - 0.5);
+    vec2 origin = vec2(float(u_map_origin), 0.0);
+    c = clamp(c, origin + 0.5, origin + size - 0.5);
     return u_splat_mode == SPLAT_POINTS ? mat2(sigma.x * sigma.x, 0.0, 0.0, sigma.y * sigma.y)
         : footprint_covariance(view, tx, ty, c, max(sigma.x, sigma.y));
 }
 
-void target_bounds(out vec2 lo, out vec2 hi) {
-    lo = vec2(0.0);
-    hi = vec2(u_map_size);
+void target_bounds(out vec2 lo, out vec2 hi) {      // the slot
+    lo = vec2(float(u_map_origin), 0.0);
+    hi = lo + vec2(u_map_size);
 }
 
 // A = one map pixel's (u, v) area times the surface area per (u, v) area.

@@ -1,10 +1,13 @@
 """Pass 3c: receiver irradiance maps over each receiver's (u, v) domain.
 
-The same splats as the caustic map, drawn a second time into one RGBA32F target per
-receiver (``settings.receiver_map`` texels; row 0 at vmin, as
-:class:`renderers.results.ReceiverMap` requires): rgb caustic irradiance in W per m²
-of receiver surface (flux per (u, v) area divided by the surface area per (u, v)
-area), a = splat weight.
+The same splats as the caustic map, drawn into one RGBA32F atlas with a slot per
+receiver, side by side (receiver i's slot starts at texel column i * W; row 0 at
+vmin, as :class:`renderers.results.ReceiverMap` requires): rgb caustic irradiance
+in W per m² of receiver surface (flux per (u, v) area divided by the surface area
+per (u, v) area), a = splat weight. A slot has ``settings.receiver_map`` texels;
+where the camera reads its caustics from these maps (``caustic_lookup =
+"receivers"``: :func:`.splat_maps.splat_maps`) the triangles go to a second atlas
+with twice as many texels per side.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from renderers.caustics_mapping.caustic_splat import SplatOptions, draw_splats
+from renderers.caustics_mapping.caustic_splat import SplatOptions, TrianglesApart, draw_splats
 from renderers.caustics_mapping.caustic_trace import Trace
 from renderers.caustics_mapping.context import pool
 from renderers.caustics_mapping.lights import LightSetup
@@ -65,15 +68,41 @@ def uv_mapping(receiver: ReceiverGeometry) -> UvMapping:
 
 
 def splat_receiver_map(
-    ctx: moderngl.Context, light: LightSetup, traces: list[Trace], target: moderngl.Texture,
-    *, index: int, receiver: ReceiverGeometry, mapping: UvMapping,
+    ctx: moderngl.Context, light: LightSetup, traces: list[Trace], atlas: moderngl.Texture,
+    *, index: int, size: tuple[int, int], receiver: ReceiverGeometry, mapping: UvMapping,
     positions: ReceiverPositions, caustic_size: int, options: SplatOptions,
+    fine: moderngl.Texture | None = None, oversample: int = 1,
 ) -> None:
-    """Accumulate the splats that landed on receiver ``index`` into ``target``
-    (cleared first; a texture of the context's pool)."""
-    fbo = pool(ctx).framebuffer([target])
-    fbo.use()
-    fbo.clear(0.0, 0.0, 0.0, 0.0)
+    """Add the splats that landed on receiver ``index`` into its slot of ``atlas``
+    (``size`` = (W, H) texels, from column ``index * W``; the caller clears the
+    atlases). ``fine``: an atlas of ``oversample`` x ``size`` slots that takes the
+    triangles instead (the Gaussians, smooth at the map's own texels, stay in
+    ``atlas``)."""
+    resources = pool(ctx)
+
+    def bind(fbo: moderngl.Framebuffer, slot: tuple[int, int, int, int]) -> None:
+        fbo.use()
+        fbo.viewport = slot
+        fbo.scissor = slot      # a kernel past the slot's edge stays out of its neighbour
+
+    coarse = resources.framebuffer([atlas])
+    slot = (index * size[0], 0, size[0], size[1])
+    bind(coarse, slot)
+    apart, framebuffers = None, [coarse]
+    if fine is not None:
+        fine_fbo = resources.framebuffer([fine])
+        framebuffers.append(fine_fbo)
+        fine_size = (oversample * size[0], oversample * size[1])
+        fine_slot = (index * fine_size[0], 0, *fine_size)
+
+        def fine_uniforms(program: moderngl.Program) -> None:
+            set_uniform(program, "u_map_size", fine_size)
+            set_uniform(program, "u_map_origin", fine_slot[0])
+
+        apart = TrianglesApart(
+            scale=oversample, uniforms=fine_uniforms,
+            target=lambda kind: bind(fine_fbo, fine_slot) if kind == "triangles"
+            else bind(coarse, slot))
 
     def uniforms(program: moderngl.Program) -> None:
         set_light_uniforms(program, light)
@@ -87,7 +116,10 @@ def splat_receiver_map(
         set_uniform(program, "u_row_v", tuple(float(x) for x in mapping.rows[1]))
         set_uniform(program, "u_uv_per_metre", mapping.uv_per_metre)
         set_uniform(program, "u_extent", tuple(float(x) for x in receiver.extent))
-        set_uniform(program, "u_map_size", target.size)
+        set_uniform(program, "u_map_size", size)
+        set_uniform(program, "u_map_origin", slot[0])
 
     draw_splats(ctx, "receiver_splat.glsl", traces, options, max_radius=MAX_RADIUS_PX,
-                uniforms=uniforms)
+                uniforms=uniforms, triangles_apart=apart)
+    for fbo in framebuffers:
+        fbo.scissor = None

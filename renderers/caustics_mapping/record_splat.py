@@ -6,8 +6,10 @@ read only that buffer. This module lets a caller hand in such records from any
 source (exact light paths from a ray tracer, the method's own records with some
 fields replaced) and runs the very passes a frame runs on them: per light sample the
 receiver positions (the (u, v) of hits on receivers whose (u, v) is not affine),
-then ``light_sample.splat_maps``: the caustic map with the kernel the settings
-name and, from the same records, each receiver's (u, v) irradiance map. Nothing is
+then ``splat_maps.splat_maps``: the caustic map the camera would read (the
+light-space one or, with ``caustic_lookup = "receivers"``, none besides the receivers'
+own) with the kernel the settings name and, from the same records, each receiver's
+(u, v) irradiance map. Nothing is
 splatted differently, so two record sets differ in their maps only by what their
 records say. The records are the grid's: a frame's rim patches (``rim_patches``
 > 1) are traced from its grid, not handed in, so the hook splats every quad as a
@@ -48,11 +50,11 @@ from renderers.caustics_mapping.light_sample import (
     FrameState,
     light_faces,
     scene_setup,
-    splat_maps,
 )
 from renderers.caustics_mapping.lights import LightSetup, light_setups
 from renderers.caustics_mapping.presets import resolve_scene
 from renderers.caustics_mapping.receiver_positions import render_receiver_positions
+from renderers.caustics_mapping.splat_maps import splat_maps
 from renderers.results import ReceiverMap
 from scenes import Scene, effects_of
 from scenes.errors import HarnessError
@@ -212,7 +214,7 @@ def _splat(scene: Scene, records, ctx: moderngl.Context,
         for trace in traces:
             trace.give_back(resources)
         positions.give_back(resources)
-        resources.give_back(caustic)
+        caustic.give_back(resources)
     error = ctx.error
     for mesh in setup.receivers + setup.objects:
         mesh.release()

@@ -53,6 +53,8 @@ uniform int u_grid;               // vertex grid per object view
 uniform int u_splat_mode;         // 0 points, 1 footprint, 2 triangles
 uniform float u_footprint_scale;  // footprint covariance scale
 uniform float u_max_triangle;     // pixels: wider triangles fall back to Gaussians
+uniform float u_px_scale;         // target pixels per pixel of the map whose thresholds
+                                  // (u_max_triangle, STRETCH_PX) decide the kernels
 uniform float u_sigma;            // points: Gaussian standard deviation (caustic-map texels)
 uniform float u_cut;              // Gaussian cut-off radius (sigmas)
 uniform float u_max_radius;       // Gaussian sprite radius cap (target pixels)
@@ -161,7 +163,8 @@ bool quad_shape_drawn(int view, int qx, int qy, vec2 c[4]) {
     float longest = max(max(length(e1), length(e3)),
                         max(length(c[2] - c[1]), length(c[2] - c[3])));
     float area = 0.5 * abs(a1 + a2);          // the quad's area (pixels^2)
-    if (u_patches == 0 && longest > STRETCH_PX && longest * longest > STRETCH_RATIO * area
+    if (u_patches == 0 && longest > STRETCH_PX * u_px_scale
+        && longest * longest > STRETCH_RATIO * area
         && (near_silhouette(view, qx, qy) || near_silhouette(view, qx + 1, qy + 1)))
         return false;                         // a rim sliver (see RIM_STEPS)
     return a1 * a2 > 0.0;                     // same orientation, neither degenerate
