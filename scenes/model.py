@@ -506,9 +506,9 @@ class Settings:
     lowpass: bool = spec(False, doc="Low-pass filter the caustic map the camera reads.")
     caustic_lookup: Literal["light", "receivers"] | None = spec(
         None, doc="Where the camera reads caustic irradiance: the light-space caustic map "
-        "(the paper's), or the receivers' (u, v) maps, drawn at 2 x `receiver_map` (their "
-        "2 x 2 means are the receiver maps scored), which makes the light-space map a "
-        "by-product drawn only for the `render` command's outputs "
+        "(the paper's), or the receivers' own (u, v) maps, whose triangles are drawn for "
+        "it at 2 x `receiver_map` (their 2 x 2 means enter the scored maps); the "
+        "light-space map is then drawn only for the `render` command's outputs "
         "(preset: paper light, strong receivers).",
     )
     receiver_map: Size2 = spec(

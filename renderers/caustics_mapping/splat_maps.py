@@ -17,7 +17,7 @@ import numpy as np
 
 from renderers.caustics_mapping.caustic_splat import SplatOptions, splat_caustic_map
 from renderers.caustics_mapping.caustic_trace import Trace
-from renderers.caustics_mapping.context import pool
+from renderers.caustics_mapping.context import ResourcePool, pool
 from renderers.caustics_mapping.footprint import FALLBACK_TEXELS, mean_hit_spacing_texels
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.lowpass import lowpass_filter
@@ -69,7 +69,7 @@ class CausticMaps:
     receivers: moderngl.Texture | None = None
     triangles: moderngl.Texture | None = None
 
-    def give_back(self, resources) -> None:
+    def give_back(self, resources: ResourcePool) -> None:
         """Return the textures to the context's pool."""
         for texture in (self.light, self.receivers, self.triangles):
             if texture is not None:
