@@ -3,15 +3,15 @@
 //
 // Receivers are Lambertian: L = albedo / pi * (E_direct * visibility + E_caustic),
 // E_direct only when the scene has direct lighting, visibility from the shadow map
-// only with the shadows effect. E_caustic, u_caustic_lookup 0 (the paper's): looked
+// only with the shadows effect. E_caustic, CAUSTIC_LOOKUP 0 (the paper's): looked
 // up in the caustic map at the fragment's projection into the light's view (like a
 // shadow-map lookup). The caustic map holds the irradiance of the receiver the light
 // sees in that texel, so it is used only where the positions atlas shows this very
-// fragment (same receiver, within three positions texels). u_caustic_lookup 1: read
+// fragment (same receiver, within three positions texels). CAUSTIC_LOOKUP 1: read
 // in the receiver's own (u, v) map at the fragment's (u, v), which holds that
 // receiver's caustic irradiance wherever the light lands on it (no visibility test).
 // Receivers seen directly read it at the nearest texel, or bilinearly with
-// u_filtered (settings.lookup = "filtered").
+// FILTERED 1 (settings.lookup = "filtered").
 //
 // DEPTH_ONLY: the objects' depth pre-pass; the OBJECT variant then shades each
 // pixel once (depth test <=) instead of every object fragment drawn before the
@@ -82,11 +82,11 @@ uniform ivec2 u_viewport;          // camera image W, H (px)
 uniform float u_pixel_width;       // width of one pixel at unit distance (tangent)
 uniform int u_object;              // object index
 // Compile-time: CAUSTIC_LOOKUP (0: the caustic map, 1: the receivers' (u, v) maps),
-// FILTERED (1: bilinear reads, the receivers seen directly as well), and
-// OBJECT's MATERIAL (0 none: black, 1 closed dielectric, 2 open
-// dielectric, 3 conductor), DISPERSION (1: one path per channel), ALL_PATHS (1:
-// TIR reflects, else it ends the chain), FILTERED (1: bilinear reads within one
-// surface), and the estimator's ESTIMATOR and SAFEGUARDED (surface_estimate.glsl).
+// FILTERED (1: bilinear reads within one surface, and of the caustic irradiance of
+// receivers seen directly), and OBJECT's MATERIAL (0 none: black, 1 closed
+// dielectric, 2 open dielectric, 3 conductor), DISPERSION (1: one path per channel),
+// ALL_PATHS (1: TIR reflects, else it ends the chain), and the estimator's
+// ESTIMATOR and SAFEGUARDED (surface_estimate.glsl).
 // Each variant holds only its own path: on llvmpipe, uniform branches and loops
 // over all of them (every call inlined, constant loops unrolled) made the object
 // draw 5x slower for the material and dispersion, 1.5x for the estimator.

@@ -102,13 +102,14 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
                                for stage in ("FLAGS", "LIST", "COMPACT"))
     boxed = load_program(ctx, name, defines={"BOXED": 1})
     programs = [gaussians, setup, flags, listing, compact, boxed]
-    stages = ()
+    stages, triangle_programs = (), []
     if options.mode == "triangles":
         # The quads' and the corners' data first (compute), then the triangles.
         stages = tuple(load_program(ctx, name, defines={"TRIANGLES": 1, stage: 1},
                                     compute=True) for stage in ("QUAD_PASS", "CORNER_PASS"))
-        programs += [*stages, load_program(ctx, name, defines={"TRIANGLES": 1},
-                                           geometry=True)]
+        triangle_programs = [*stages, load_program(ctx, name, defines={"TRIANGLES": 1},
+                                                   geometry=True)]
+        programs += triangle_programs
     for program in programs:
         uniforms(program)
         set_uniform(program, "u_splat_mode", SPLAT_MODES[options.mode])
@@ -120,8 +121,8 @@ def draw_splats(ctx: moderngl.Context, name: str, traces: list[Trace], options: 
         set_uniform(program, "u_max_radius", float(max_radius))
         set_uniform(program, "u_tight_boxes", int(TIGHT_BOXES))
         set_uniform(program, "u_px_scale", 1.0)
-    if stages and triangles_apart is not None:
-        for program in programs[-3:]:          # the quad and corner stages, the draw
+    if triangles_apart is not None:
+        for program in triangle_programs:
             triangles_apart.uniforms(program)
             set_uniform(program, "u_max_triangle", MAX_TRIANGLE_PX * triangles_apart.scale)
             set_uniform(program, "u_px_scale", float(triangles_apart.scale))
