@@ -22,6 +22,7 @@ from renderers.caustics_mapping.footprint import FALLBACK_TEXELS, mean_hit_spaci
 from renderers.caustics_mapping.lights import LightSetup
 from renderers.caustics_mapping.lowpass import lowpass_filter
 from renderers.caustics_mapping.receiver_splat import splat_receiver_map
+from renderers.caustics_mapping.scored_maps import scored_maps
 
 if TYPE_CHECKING:
     from renderers.caustics_mapping.light_sample import FrameState
@@ -162,10 +163,12 @@ def _splat_receiver_maps(state: FrameState, light: LightSetup, *, traces: list[T
                            receiver=rec, mapping=setup.mappings[index], positions=positions,
                            caustic_size=s.caustic_map, options=options, fine=fine,
                            oversample=oversample)
-    maps = read_rgba(atlases[0])[:, :, :3]
-    if fine is not None:
-        maps = maps + read_rgba(fine)[:, :, :3].reshape(
-            h, oversample, -1, oversample, 3).mean(axis=(1, 3))
+    if fine is None:
+        maps = read_rgba(atlases[0])[:, :, :3]
+    else:
+        scored = scored_maps(ctx, atlases[0], fine, factor=oversample)
+        maps = read_rgba(scored)[:, :, :3]
+        resources.give_back(scored)
     for index in range(len(receivers)):
         state.acc.maps[index] += maps[:, index * w:(index + 1) * w]
     return atlases[0], fine
