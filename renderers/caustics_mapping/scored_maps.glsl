@@ -12,9 +12,7 @@ uniform int u_factor;
 
 #if defined VERTEX_SHADER
 void main() {
-    // A full-screen triangle from gl_VertexID.
-    vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
-    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
+    gl_Position = fullscreen_vertex(gl_VertexID);
 }
 #elif defined FRAGMENT_SHADER
 out vec4 out_color;
