@@ -46,7 +46,8 @@
 
 #if defined GEOMETRY_SHADER || defined COMPUTE_SHADER
 // quad q: x 1 if drawn (0 not), y and z the receiver areas (m^2) of its triangles
-// (c0, c1, c2) and (c0, c2, c3); quad_means[2q], [2q + 1]: their mean irradiance
+// (c0, c1, c2) and (c0, c2, c3), w 1 where routed to the coarser target (u_route_px);
+// quad_means[2q], [2q + 1]: their mean irradiance
 // (rgb, W/m^2): half the quad's flux over each area.
 layout(std430, binding = 2) buffer QuadData { vec4 quad_data[]; };
 layout(std430, binding = 3) buffer QuadMeans { vec4 quad_means[]; };
@@ -57,6 +58,13 @@ layout(std430, binding = 4) buffer CornerData { vec4 corner_data[]; };
 // with u_handoff = 1.
 layout(std430, binding = 8) readonly buffer Handoff { int handoff[]; };
 uniform int u_handoff;
+// With a finer target for the triangles than the Gaussians' (TrianglesApart): a quad
+// wider than u_route_px pixels of the Gaussians' target is routed there (0: none;
+// quad_data's w). u_route: 0 the draw takes every drawn quad; 1 those routed finer;
+// 2 those routed coarser, their corners (finer target pixels) times 1 / u_px_scale,
+// exact (a power of two; to_target is linear in the map's size and origin).
+uniform float u_route_px;
+uniform int u_route;
 
 int quad_index(int view, int qx, int qy) {
     return (view * (u_grid - 1) + qy) * (u_grid - 1) + qx;
@@ -113,7 +121,10 @@ void main() {
     vec3 half_flux = vec3(0.0);
     for (int m = 0; m < 4; ++m) half_flux += 0.125 * splat_records[record[m] * 5 + 3].rgb;
     quad_flags[q] = patched ? 2 : drawn ? 1 : 0;
-    quad_data[q] = vec4(drawn ? 1.0 : 0.0, areas, 0.0);
+    vec2 extent = max(max(c[0], c[1]), max(c[2], c[3]))
+        - min(min(c[0], c[1]), min(c[2], c[3]));
+    bool coarse = u_route_px > 0.0 && max(extent.x, extent.y) > u_route_px * u_px_scale;
+    quad_data[q] = vec4(drawn ? 1.0 : 0.0, areas, coarse ? 1.0 : 0.0);
     quad_means[2 * q] = vec4(areas.x > 0.0 ? half_flux / areas.x : vec3(0.0), 0.0);
     quad_means[2 * q + 1] = vec4(areas.y > 0.0 ? half_flux / areas.y : vec3(0.0), 0.0);
 }
@@ -251,12 +262,15 @@ void main() {
     int q = v_quad[0];
     vec4 data = quad_data[q];
     if (data.x < 0.5) return;
+    bool coarse = data.w > 0.5;
+    if ((u_route == 1 && coarse) || (u_route == 2 && !coarse)) return;
+    float to_pixels = u_route == 2 ? 1.0 / u_px_scale : 1.0;
     int view, qx, qy, record[4];
     quad_corners(q, view, qx, qy, record);
     vec2 c[4];
     vec3 e[4], lo_e[4], hi_e[4];
     for (int k = 0; k < 4; ++k) {
-        c[k] = vec2(corner_data[3 * record[k]].w, corner_data[3 * record[k] + 1].w);
+        c[k] = to_pixels * vec2(corner_data[3 * record[k]].w, corner_data[3 * record[k] + 1].w);
         e[k] = corner_data[3 * record[k]].rgb;
         lo_e[k] = corner_data[3 * record[k] + 1].rgb;
         hi_e[k] = corner_data[3 * record[k] + 2].rgb;
