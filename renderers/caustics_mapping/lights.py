@@ -22,6 +22,7 @@ closed form that the shaders evaluate (``texel_measure`` in ``common.glsl``).
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import dataclass
 
@@ -41,6 +42,9 @@ _CUBE_AXES = (
 )
 #: Largest half-angle of a fitted perspective object view before the cube is used.
 _MAX_FITTED_HALF_ANGLE = math.radians(60.0)
+#: Hulls remembered (:func:`_extreme_points`), by content; the oldest goes first.
+_HULLS: dict[bytes, np.ndarray] = {}
+_HULLS_KEPT = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -342,6 +346,36 @@ def _points(geometry: SceneGeometry, receivers: bool, objects: bool) -> np.ndarr
     return np.concatenate(parts).astype(np.float64)
 
 
+def _extreme_points(points: np.ndarray) -> np.ndarray:
+    """The points on their convex hull: its vertices, and the points qhull finds
+    within rounding of a facet (all of them where the hull has no volume).
+
+    The object views depend on the objects' points only through extremes of linear
+    functions (their box, depths along a direction, the rectangle of their
+    projection: a perspective projection of points in front of the eye keeps the
+    image of each inner point inside that of the hull) and through the largest
+    distance from a centre (a convex function), which the hull's points attain: the
+    same views from fewer points (the bunny's 28,088 vertices: 1,640; the light
+    views took 8 ms of strong's frame on llvmpipe's 2 cores, 4 ms of paper's).
+    Remembered by the points' content, as a frame's meshes are built anew.
+    """
+    key = hashlib.blake2b(np.ascontiguousarray(points).tobytes(), digest_size=16).digest()
+    if key not in _HULLS:
+        from scipy.spatial import ConvexHull, QhullError  # noqa: PLC0415 - loads only here
+
+        try:
+            hull = ConvexHull(points)
+            index = np.union1d(hull.vertices, hull.coplanar[:, 0])
+            kept = points[index]
+        except (QhullError, ValueError):     # flat, or too few points: all of them
+            kept = points
+        if len(_HULLS) >= _HULLS_KEPT:
+            _HULLS.pop(next(iter(_HULLS)))
+        kept.flags.writeable = False
+        _HULLS[key] = kept
+    return _HULLS[key]
+
+
 def _hammersley(n: int) -> np.ndarray:
     """n deterministic, well-spread points in [0, 1)^2 (Hammersley set)."""
     i = np.arange(n)
@@ -366,7 +400,7 @@ def light_setups(scene: Scene, geometry: SceneGeometry, *,
     """
     light = scene.light
     everything = _points(geometry, True, True)
-    objects = _points(geometry, False, True)
+    objects = _extreme_points(_points(geometry, False, True))
     tight = frustum_fit == "tight"
     fit = _tight_perspective if tight else _fitted_perspective
     if isinstance(light, DirectionalLight):
