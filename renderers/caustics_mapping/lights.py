@@ -13,7 +13,8 @@ Two kinds of view per light:
   light is inside or very close to the objects' bounding sphere. The fitted view is
   a square around the objects' bounding sphere (``frustum = "square"``) or a
   rectangle fitted to their projection, rotated about the view axis to the smallest
-  area (``frustum = "tight"``).
+  area (``frustum = "tight"``). Both are fitted to the points on the objects' convex
+  hull, which give the views every vertex gives (:func:`_extreme_points`).
 
 Views are rectangles on the view plane (square and symmetric but for the tight
 object view), so a texel's solid angle (perspective) or area (orthographic) has a
