@@ -250,10 +250,3 @@ float fresnel_transmittance(float cos_i, float eta_i, float eta_t) {
     float rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
     return 1.0 - 0.5 * (rs * rs + rp * rp);
 }
-
-// Vertex `id` (0, 1, 2) of a triangle covering the whole viewport (clip space), for
-// passes that shade every texel of their target.
-vec4 fullscreen_vertex(int id) {
-    vec2 p = vec2(float((id << 1) & 2), float(id & 2));
-    return vec4(p * 2.0 - 1.0, 0.0, 1.0);
-}

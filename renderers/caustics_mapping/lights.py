@@ -23,12 +23,12 @@ closed form that the shaders evaluate (``texel_measure`` in ``common.glsl``).
 
 from __future__ import annotations
 
-import hashlib
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from renderers.caustics_mapping.meshes import ContentCache
 from scenes.geometry import SceneGeometry
 from scenes.model import AreaLight, DirectionalLight, PointLight, Scene, SpotLight
 
@@ -43,9 +43,8 @@ _CUBE_AXES = (
 )
 #: Largest half-angle of a fitted perspective object view before the cube is used.
 _MAX_FITTED_HALF_ANGLE = math.radians(60.0)
-#: Hulls remembered (:func:`_extreme_points`), by content; the oldest goes first.
-_HULLS: dict[bytes, np.ndarray] = {}
-_HULLS_KEPT = 8
+#: The objects' hull points seen so far (:func:`_extreme_points`).
+_HULLS = ContentCache(8)
 
 
 @dataclass(frozen=True, eq=False)
@@ -360,21 +359,20 @@ def _extreme_points(points: np.ndarray) -> np.ndarray:
     views took 8 ms of strong's frame on llvmpipe's 2 cores, 4 ms of paper's).
     Remembered by the points' content, as a frame's meshes are built anew.
     """
-    key = hashlib.blake2b(np.ascontiguousarray(points).tobytes(), digest_size=16).digest()
-    if key not in _HULLS:
-        from scipy.spatial import ConvexHull, QhullError  # noqa: PLC0415 - loads only here
+    return _HULLS.get((points,), lambda: _hull_of(points))
 
-        try:
-            hull = ConvexHull(points)
-            index = np.union1d(hull.vertices, hull.coplanar[:, 0])
-            kept = points[index]
-        except (QhullError, ValueError):     # flat, or too few points: all of them
-            kept = points
-        if len(_HULLS) >= _HULLS_KEPT:
-            _HULLS.pop(next(iter(_HULLS)))
-        kept.flags.writeable = False
-        _HULLS[key] = kept
-    return _HULLS[key]
+
+def _hull_of(points: np.ndarray) -> np.ndarray:
+    """:func:`_extreme_points` computed, read-only."""
+    from scipy.spatial import ConvexHull, QhullError  # noqa: PLC0415 - loads only here
+
+    try:
+        hull = ConvexHull(points)
+        kept = points[np.union1d(hull.vertices, hull.coplanar[:, 0])]
+    except (QhullError, ValueError):     # flat, or too few points: all of them
+        kept = points.copy()
+    kept.flags.writeable = False
+    return kept
 
 
 def _hammersley(n: int) -> np.ndarray:

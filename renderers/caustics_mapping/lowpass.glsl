@@ -8,11 +8,9 @@
 uniform sampler2D u_source;
 uniform ivec2 u_size;              // W, H texels of one slot
 
-#if defined VERTEX_SHADER
-void main() {
-    gl_Position = fullscreen_vertex(gl_VertexID);
-}
-#elif defined FRAGMENT_SHADER
+#include "fullscreen.glsl"
+
+#if defined FRAGMENT_SHADER
 out vec4 out_color;
 void main() {
     ivec2 t = ivec2(gl_FragCoord.xy);

@@ -11,11 +11,35 @@ import numpy as np
 from scenes.geometry import TriangleMesh
 from scenes.geometry.mesh import is_convex
 
-__all__ = ["GpuMesh", "back_faces_hidden", "convex", "upload_mesh"]
+__all__ = ["ContentCache", "GpuMesh", "back_faces_hidden", "convex", "upload_mesh"]
 
-#: Convexity of meshes seen so far, by content (a render rebuilds its meshes).
-_CONVEX: dict[bytes, bool] = {}
-_CONVEX_KEPT = 64
+
+
+class ContentCache:
+    """Values computed from arrays, remembered by the arrays' content (a render
+    builds its meshes anew every frame, so their identity says nothing): at most
+    ``kept`` values, the oldest dropped first."""
+
+    def __init__(self, kept: int):
+        self.kept = kept
+        self._values: dict[bytes, object] = {}
+
+    def get(self, arrays, compute):
+        """``compute()``'s value for the content of ``arrays`` (a sequence of
+        array-likes), computed on the first call for that content."""
+        digest = hashlib.blake2b(digest_size=16)
+        for array in arrays:
+            digest.update(np.ascontiguousarray(array).tobytes())
+        key = digest.digest()
+        if key not in self._values:
+            if len(self._values) >= self.kept:
+                self._values.pop(next(iter(self._values)))
+            self._values[key] = compute()
+        return self._values[key]
+
+
+#: Convexity of meshes seen so far.
+_CONVEX = ContentCache(64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,16 +97,8 @@ def convex(mesh: TriangleMesh) -> bool:
     """:func:`scenes.geometry.mesh.is_convex`, remembered by the mesh's content: the
     test takes 25 ms on a 20,480-face sphere and 0.1 s on the bunny, and a render
     rebuilds its meshes every frame."""
-    digest = hashlib.blake2b(digest_size=16)
-    for array in (mesh.positions, mesh.faces):
-        digest.update(np.ascontiguousarray(array).tobytes())
-    digest.update(bytes([mesh.closed]))
-    key = digest.digest()
-    if key not in _CONVEX:
-        if len(_CONVEX) >= _CONVEX_KEPT:
-            _CONVEX.pop(next(iter(_CONVEX)))
-        _CONVEX[key] = is_convex(mesh)
-    return _CONVEX[key]
+    return _CONVEX.get((mesh.positions, mesh.faces, np.array([mesh.closed])),
+                       lambda: is_convex(mesh))
 
 
 def upload_mesh(ctx: moderngl.Context, mesh: TriangleMesh) -> GpuMesh:

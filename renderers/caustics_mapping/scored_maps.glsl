@@ -10,11 +10,9 @@ uniform sampler2D u_coarse;
 uniform sampler2D u_fine;
 uniform int u_factor;
 
-#if defined VERTEX_SHADER
-void main() {
-    gl_Position = fullscreen_vertex(gl_VertexID);
-}
-#elif defined FRAGMENT_SHADER
+#include "fullscreen.glsl"
+
+#if defined FRAGMENT_SHADER
 out vec4 out_color;
 void main() {
     ivec2 t = ivec2(gl_FragCoord.xy);
