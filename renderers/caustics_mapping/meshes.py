@@ -14,7 +14,6 @@ from scenes.geometry.mesh import is_convex
 __all__ = ["ContentCache", "GpuMesh", "back_faces_hidden", "convex", "upload_mesh"]
 
 
-
 class ContentCache:
     """Values computed from arrays, remembered by the arrays' content (a render
     builds its meshes anew every frame, so their identity says nothing): at most

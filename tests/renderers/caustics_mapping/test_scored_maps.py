@@ -48,6 +48,8 @@ def test_each_texel_is_coarse_plus_the_mean_of_its_finer_block(ctx, factor, reco
 
 
 def test_a_finer_atlas_of_another_size_is_refused(ctx):
+    """Bad input: a finer atlas that is not ``factor`` times the coarse one per side
+    is named in a ValueError, not averaged over the wrong blocks."""
     coarse = _upload(ctx, np.zeros((4, 8, 4)))
     fine = _upload(ctx, np.zeros((8, 12, 4)))
     with pytest.raises(ValueError, match="not 2 x"):
