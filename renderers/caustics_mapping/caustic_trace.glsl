@@ -97,8 +97,6 @@ ivec2 atlas_texel(int face, ivec2 t, int size, int stride) {
     return ivec2(face * size * stride, 0) + stride * t + (stride - 1) / 2;
 }
 
-const int STATUS_NO_EXIT = 5;   // double refraction found no exit surface
-const int STATUS_REENTERED = 7; // the exit (or reflected) ray meets its object again
 const int REENTRY_STEPS = 48;   // samples of the exit ray over the object's extent
 const float SHEET_STEPS = 8.0;     // reflection_blocked: a sheet's depth change per sample step
 const float GRAZING = 0.3;       // reflection_blocked: |cos| below it is edge-on

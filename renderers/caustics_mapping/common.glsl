@@ -20,8 +20,10 @@ const int STATUS_HIT = 1;       // splatted
 const int STATUS_LOST = 2;      // a lookup found no receiver: splat dropped
 const int STATUS_TIR = 3;       // total internal reflection at the exit surface
 const int STATUS_DIVERGED = 4;  // the estimator produced a non-finite update
+const int STATUS_NO_EXIT = 5;   // double refraction found no exit surface
 const int STATUS_UNCONVERGED = 6;  // verified hits: residual above tolerance, or no
                                    // receiver at the estimate
+const int STATUS_REENTERED = 7; // the exit (or reflected) ray meets its object again
 
 // Whether a record is splatted: a hit, or (u_splat_unconverged) an unverified
 // estimate that still lies on a receiver (record fields: status, receiver index).

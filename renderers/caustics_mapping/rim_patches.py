@@ -21,6 +21,10 @@ from renderers.caustics_mapping.uniforms import set_uniform
 
 __all__ = ["RimPatches", "find_rim_patches", "grid_shares", "patch_shares"]
 
+#: Only rim quads with a corner whose light leaves the object are patched
+#: (``rim_patches.glsl``, ``leaves``). False patches every rim quad that shows the
+#: object, TIR and no-exit corners alone included (tests compare the two).
+EXITS_ONLY = True
 #: Neighbouring patches' shared vertices are traced once, by one of them, and copied
 #: to the others (``rim_patches.glsl``): the same records, a third fewer traced on
 #: glass_sphere and bunny. False traces every copy (tests compare the two).
@@ -132,6 +136,7 @@ def find_rim_patches(ctx: moderngl.Context, trace: Trace, *, grid: int,
         program = load_program(ctx, "rim_patches.glsl", defines={stage: 1}, compute=True)
         set_uniform(program, "u_grid", grid)
         set_uniform(program, "u_count", quads)
+        set_uniform(program, "u_exits_only", int(EXITS_ONLY))
         if groups:
             program.run(group_x=groups)
         ctx.memory_barrier()

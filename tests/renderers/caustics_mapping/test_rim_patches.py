@@ -25,17 +25,20 @@ def _frame(ctx, name, **settings):
 
 
 def _band(status: np.ndarray, grid: int) -> np.ndarray:
-    """The grid quads the rule patches: not all four corners empty, and a corner
-    empty or next to (one step along an axis) an empty vertex or the grid's border."""
-    empty = np.pad(status.reshape(-1, grid, grid) == STATUS["empty"],
-                   ((0, 0), (1, 1), (1, 1)), constant_values=True)
+    """The grid quads the rule patches: a corner empty or next to (one step along an
+    axis) an empty vertex or the grid's border, and a corner whose light leaves the
+    object (any status but empty, TIR and no exit)."""
+    status = status.reshape(-1, grid, grid)
+    empty = np.pad(status == STATUS["empty"], ((0, 0), (1, 1), (1, 1)), constant_values=True)
     near = empty.copy()
     near[:, 1:-1, 1:-1] |= (empty[:, 2:, 1:-1] | empty[:, :-2, 1:-1]
                             | empty[:, 1:-1, 2:] | empty[:, 1:-1, :-2])
-    near, empty = near[:, 1:-1, 1:-1], empty[:, 1:-1, 1:-1]
+    near = near[:, 1:-1, 1:-1]
+    inside = ("empty", "tir", "no_exit")
+    leaves = ~np.isin(status, [STATUS[k] for k in inside])
     corners = lambda a: (a[:, :-1, :-1], a[:, :-1, 1:], a[:, 1:, :-1], a[:, 1:, 1:])  # noqa: E731
-    all_empty = np.logical_and.reduce(corners(empty))
-    return (np.logical_or.reduce(corners(near)) & ~all_empty).reshape(-1)
+    return (np.logical_or.reduce(corners(near))
+            & np.logical_or.reduce(corners(leaves))).reshape(-1)
 
 
 @pytest.mark.regression_lock
@@ -48,6 +51,25 @@ def test_the_patched_quads_are_the_rules_in_order(ctx, name):
     expected = np.flatnonzero(_band(frame.hits["status"], grid))
     assert len(expected) > 50
     np.testing.assert_array_equal(quads, expected)
+
+
+@pytest.mark.regression_lock
+def test_rim_quads_whose_light_stays_inside_are_left_to_the_grid(ctx, monkeypatch):
+    """The bunny's silhouette band seen from the light is mostly total internal
+    reflection. Patching only the rim quads with a corner whose light leaves the
+    object patches under 70 % as many quads as the whole band (545 of 1,250 at the
+    bundled grid), and the patches still hold at least 97 % of the hits the whole
+    band's patches find (3,568 of 3,604 at the bundled grid) and the flux the maps
+    receive to 0.6 % (this test's grid of 48: 270 of 448 quads, 1,878 of 1,902 hits,
+    flux 0.19 % less; the bounds leave about twice and three times that)."""
+    _, frame = _frame(ctx, "bunny")
+    monkeypatch.setattr(rim_patches, "EXITS_ONLY", False)
+    _, whole = _frame(ctx, "bunny")
+    assert len(frame.patches["quad"]) < 0.7 * len(whole.patches["quad"])
+    hits = [int(np.sum(f.patches["status"] == STATUS["hit"])) for f in (frame, whole)]
+    assert hits[0] >= 0.97 * hits[1]
+    flux = [f.result.receivers[0].total_flux() for f in (frame, whole)]
+    np.testing.assert_allclose(flux[0], flux[1], rtol=0.006)
 
 
 @pytest.mark.regression_lock
