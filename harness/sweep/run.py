@@ -279,6 +279,7 @@ class _Runner:
         try:
             for future in finished:
                 bar.task()
+                _settle(future)
                 if future in graph.merges and future.status == "finished":
                     _store_reference(self.reference_root, future.result())
                 elif future in row_of:
@@ -313,6 +314,18 @@ class _Runner:
         except Exception as error:  # a page that cannot be built costs its row
             return RowResult(job=job, worker=render.worker, error=error_line(error),
                              stage="page")
+
+
+def _settle(future) -> None:
+    """Wait until ``future`` is final again if its data was lost since it finished:
+    a worker that dies after finishing a task takes the result with it, Dask computes
+    the task again from the graph (this future still holds it), and meanwhile the
+    future is ``lost``, neither finished nor failed (read then, a row failed with no
+    error)."""
+    if future.status == "lost":
+        from dask.distributed import wait  # noqa: PLC0415 - Dask loads only for a sweep
+
+        wait([future])
 
 
 def _failure(job: RowJob, future, graph: _Graph) -> RowResult:

@@ -4,6 +4,8 @@ and the failed rows are not cached (a rerun tries them again)."""
 
 from __future__ import annotations
 
+import time
+
 import harness.sweep.run as run_module
 from harness.cli import main
 from harness.sweep.cache import ResultsCache, results_dir
@@ -62,3 +64,34 @@ def test_failing_rows_are_recorded_and_the_sweep_goes_on(tmp_path, monkeypatch, 
                    f"error: nocaustic-paper-iterations3 failed (score): {dark['error']}"]
     cached = ResultsCache(results_dir(cache))
     assert [cached.load(r["key"]) is not None for r in rows.values()] == [True, False, False]
+
+
+def slow_square(x: int) -> int:
+    """A task that takes a second, so that its recomputation is still running when
+    the test looks (importable, for the in-process worker)."""
+    time.sleep(1.0)
+    return x * x
+
+
+def test_a_result_lost_with_its_worker_is_waited_for():
+    """Regression lock (fault tolerance: no row failed for nothing): a task that
+    finished on a worker which then dies is ``lost`` (neither finished nor failed)
+    until Dask computes it again elsewhere; the sweep's collector waits for that
+    (``_settle``) instead of reading a failed row with no error, on a real in-process
+    cluster of two workers, one closed after the task finished on it."""
+    from dask.distributed import Client, LocalCluster, wait  # noqa: PLC0415
+
+    with LocalCluster(n_workers=2, processes=False, threads_per_worker=1,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        first = cluster.workers[next(iter(cluster.workers))]
+        future = client.submit(slow_square, 7, workers=[first.address],
+                               allow_other_workers=True, pure=False)
+        wait([future])
+        cluster.sync(first.close)
+        deadline = time.monotonic() + 10
+        while future.status == "finished" and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert future.status == "lost"          # the race the collector meets
+        run_module._settle(future)
+        assert future.status == "finished"
+        assert future.result() == 49
