@@ -279,7 +279,8 @@ class _Runner:
         try:
             for future in finished:
                 bar.task()
-                _settle(future)
+                if future in graph.merges or future in row_of:
+                    _settle(future)     # a seed is read only by its merge, through Dask
                 if future in graph.merges and future.status == "finished":
                     _store_reference(self.reference_root, future.result())
                 elif future in row_of:
