@@ -55,9 +55,14 @@ const int RIM_STEPS = 1;
 #if defined BAND
 layout(local_size_x = 64) in;
 
+// The status code of grid vertex (x, y) of `view` (inside the grid).
+int status_of(int view, int x, int y) {
+    return int(records[((view * u_grid + y) * u_grid + x) * 5 + 2].w + 0.5);
+}
+
 bool empty_vertex(int view, int x, int y) {
     if (x < 0 || y < 0 || x >= u_grid || y >= u_grid) return true;
-    return records[((view * u_grid + y) * u_grid + x) * 5 + 2].w < 0.5;
+    return status_of(view, x, y) == STATUS_EMPTY;
 }
 
 // Whether the light of a vertex that shows the object leaves it along an exit (or
@@ -69,8 +74,7 @@ bool empty_vertex(int view, int x, int y) {
 // relMSE 5.651e-3 -> 5.647e-3, caustic region 0.08956 -> 0.08953); every rim quad of
 // glass_sphere and metal_ring has one.
 bool leaves(int view, int x, int y) {
-    if (x < 0 || y < 0 || x >= u_grid || y >= u_grid) return false;
-    int status = int(records[((view * u_grid + y) * u_grid + x) * 5 + 2].w + 0.5);
+    int status = status_of(view, x, y);     // a quad's corners lie inside the grid
     if (u_exits_only == 0) return status != STATUS_EMPTY;
     return status != STATUS_EMPTY && status != STATUS_TIR && status != STATUS_NO_EXIT;
 }
