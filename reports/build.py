@@ -58,6 +58,7 @@ from reports.records import (
     SceneComparison,
     SceneFailure,
     Table,
+    slower,
 )
 from reports.temporal import temporal_index, temporal_script, temporal_section
 from scenes.effects import EFFECTS
@@ -72,17 +73,15 @@ __all__ = ["DEFAULT_PREVIEW_SIZE", "FLUX_RATIO_RANGE", "KEY_METRICS", "SOFTWARE_
 DEFAULT_PREVIEW_SIZE = 512
 #: Metrics of the summary table, as (view, region, metric), when computed.
 KEY_METRICS = (
-    ("receiver0", "caustic", "ssim"),
     ("receiver0", "caustic", "relmse"),
+    ("receiver0", "caustic", "ssim"),
     ("receiver0", "caustic", "flip"),
     ("receiver0", "full", "flux_ratio"),
+    ("receiver0", "outside", "stray_flux"),
     ("camera", "object", "relmse"),
-    ("camera", "object", "ssim"),
-    ("camera", "object", "flip"),
-    ("camera", "object_masked", "ssim"),
     ("camera", "object_masked", "flip"),
 )
-REGION_ORDER = ("full", "caustic", "object", "object_masked")
+REGION_ORDER = ("full", "caustic", "outside", "object", "object_masked")
 #: A page shows its flux budget when the method's flux ratio (receiver 0, whole map)
 #: is outside this range, or not a number.
 FLUX_RATIO_RANGE = (0.5, 2.0)
@@ -136,6 +135,7 @@ SOFTWARE_GL = ("llvmpipe", "softpipe", "swrast", "swiftshader", "lavapipe",
 
 def speedup_text(speedup: EqualErrorSpeedup | None) -> str:
     """An equal-error speedup as the report shows it: ``12.3× (95 % interval 8.1×–19×)``,
+    ``1.6× slower (speedup 0.625×, 95 % interval 0.5×–0.8×)`` below 1,
     ``at least 40×`` (the method is not measurably off the truth: no upper end),
     ``at most 2×`` (the reference's cheapest budget is already as accurate), or the
     bare estimate where no interval was computed (or it rounds to one number); ``—`` for
@@ -150,11 +150,16 @@ def speedup_text(speedup: EqualErrorSpeedup | None) -> str:
     low, high = float(speedup.low), float(speedup.high)
     # An interval that rounds to one number at the shown digits (no uncertainty was
     # propagated, e.g. an exact fit) says nothing: omitted.
+    interval = ""
     if math.isfinite(low) and math.isfinite(high) and _number(low) != _number(high):
-        return f"{value} (95 % interval {_number(low)}×–{_number(high)}×)"
-    if math.isfinite(low) and high == math.inf:
-        return f"{value} (95 % interval from {_number(low)}×)"
-    return value
+        interval = f"95 % interval {_number(low)}×–{_number(high)}×"
+    elif math.isfinite(low) and high == math.inf:
+        interval = f"95 % interval from {_number(low)}×"
+    if slower(speedup.speedup):
+        # Below 1 the method is slower than the reference at its own error.
+        inside = ", ".join(p for p in (f"speedup {value}", interval) if p)
+        return f"{_number(1 / speedup.speedup)}× slower ({inside})"
+    return f"{value} ({interval})" if interval else value
 
 
 def hardware(comparison: SceneComparison) -> dict[str, Any]:
@@ -332,10 +337,12 @@ def _checks_summary(comparison: SceneComparison) -> dict[str, Any]:
     for kind in CHECK_KINDS:
         mine = [t for t in checks if t.kind == kind]
         counts = {o: sum(1 for t in mine if t.outcome == o)
-                  for o in ("pass", "FAIL", "known gap", "gap closed")}
+                  for o in ("pass", "FAIL", "undecided", "known gap", "gap closed")}
         kinds.append({"kind": kind, "meaning": CHECK_KIND_MEANING[kind], "checks": mine,
                       "total": len(mine), **counts})
-    return {"passed": sum(1 for t in checks if t.passed), "failed": failed,
+    return {"passed": sum(1 for t in checks if t.outcome in ("pass", "gap closed")),
+            "failed": failed,
+            "undecided": sum(1 for t in checks if t.outcome == "undecided"),
             "gaps": sum(1 for t in checks if t.outcome == "known gap"),
             "total": len(checks), "kinds": kinds}
 
@@ -471,6 +478,22 @@ def write_page(out_dir: Path, item: SceneComparison | SceneFailure, *, folder: s
             "thumbnails": thumbnails(item, folder, out_dir, self_contained)}
 
 
+def _scene_cost_plots(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One cost plot per scene holding every method that ran the cost study, as inline
+    SVG markup (no file, so linked and self-contained indexes are alike)."""
+    scenes: dict[str, dict[str, Table]] = {}
+    for row in rows:
+        comparison = row["c"]
+        if not row["failure"] and comparison.cost is not None and comparison.cost.rows:
+            scenes.setdefault(comparison.name, {})[comparison.method] = comparison.cost
+    out = []
+    for scene, tables in scenes.items():
+        svg = plots.figure_bytes(plots.scene_cost_figure(scene, tables)).decode("utf-8")
+        out.append({"scene": scene, "methods": list(tables),
+                    "svg": Markup(svg[svg.index("<svg"):])})
+    return out
+
+
 def write_index(out_dir: Path, rows: Sequence[dict[str, Any]], *,
                 self_contained: bool = False) -> Path:
     """Write ``out_dir/index.html`` (one row per page, :func:`write_page`) and, unless
@@ -482,6 +505,7 @@ def write_index(out_dir: Path, rows: Sequence[dict[str, Any]], *,
             atomic_write_bytes(out_dir / "_static" / name, static_text(name).encode("utf-8"))
     html = page_environment().get_template("index.html.j2").render({
         "rows": rows, "key_metrics": KEY_METRICS, "formulas": METRIC_FORMULAS,
+        "cost_plots": _scene_cost_plots(rows),
         "temporal": temporal_index(rows),
         "failed": sum(1 for r in rows if r["failure"]),
         "self_contained": self_contained, "static": "_static/",

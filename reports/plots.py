@@ -144,13 +144,32 @@ def _speedup_point(speedup: EqualErrorSpeedup, point, front_times, front_errors)
     return method_time, float(front_errors[nearest])
 
 
+def _excess_column(table: Table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(shown error, lower bar, upper bar) of each row: the excess relMSE and its 95 %
+    interval where the table has them (an estimate within noise, ≤ 0, is drawn at its
+    interval's upper end with no lower bar), else the raw relMSE with no bars."""
+    raw = _float(table.column("relmse"))
+    if "excess" not in table.columns:
+        zero = np.zeros_like(raw)
+        return _loggable(raw), zero, zero
+    excess = _float(table.column("excess"))
+    low = _float(table.column("excess_low"))
+    high = _float(table.column("excess_high"))
+    shown = np.where(excess > 0, excess, high)
+    below = np.where((excess > 0) & (low > 0), shown - low, 0.0)
+    above = np.where(np.isfinite(high) & (high > shown), high - shown, 0.0)
+    return _loggable(shown), np.nan_to_num(below), np.nan_to_num(above)
+
+
 def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
                 point: tuple[float, float] | None = None,
                 cold: EqualErrorSpeedup | None = None):
-    """Warm time against relMSE (log-log): every caustics-mapping configuration,
-    their Pareto front (the table's ``pareto`` column), the reference's own
+    """Excess relMSE (the error against the noise-free image, with its 95 % interval as
+    a bar) against time, log-log: every caustics-mapping configuration warm (filled)
+    and cold (hollow: first frame in a fresh context, compilation included), their
+    Pareto front (the table's ``pareto`` column), the reference's own
     error-versus-time curve warm (solid) and cold (dashed), and the equal-error
-    speedups in the title.
+    speedups in the title ("1.6× slower" below 1).
 
     Parameters
     ----------
@@ -160,7 +179,7 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
         Shown in the title and as an arrow from the real-time point to the
         reference time that reaches the same error.
     point : (float, float), optional
-        The real-time (time s, relMSE) the speedup was computed for; when not
+        The real-time (time s, error) the speedup was computed for; when not
         given, the Pareto point nearest to ``reference_time / speedup`` in time.
     cold : EqualErrorSpeedup, optional
         The cold-against-cold speedup, named in the title beside the warm one.
@@ -169,34 +188,39 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
     series = np.array(table.column("series"))
     times = _loggable(_float(table.column("time_warm_s")))
     cold_times = _loggable(_float(table.column("time_cold_s")))
-    errors = _loggable(_float(table.column("relmse")))
+    errors, below, above = _excess_column(table)
+    label = "excess relMSE" if "excess" in table.columns else "relMSE"
     with plt.rc_context(_RC):
-        figure, ax = plt.subplots(figsize=(5.5, 3.8))
+        figure, ax = plt.subplots(figsize=(6.0, 4.2))
         if not (np.isfinite(times) & np.isfinite(errors)).any():
             ax.set_title("Cost versus accuracy")
-            _no_data(ax, "no caustic: no configuration has a finite, positive relMSE")
+            _no_data(ax, f"no caustic: no configuration has a finite, positive {label}")
             return figure
         cm = series == "caustics_mapping"
-        ax.scatter(times[cm], errors[cm], s=10, color="tab:blue", alpha=0.6,
-                   label="caustics mapping configurations")
+        ax.errorbar(times[cm], errors[cm], yerr=[below[cm], above[cm]], fmt="o",
+                    markersize=3, color="tab:blue", alpha=0.6, elinewidth=0.7,
+                    label="method, warm")
+        ax.scatter(cold_times[cm], errors[cm], s=14, facecolors="none",
+                   edgecolors="tab:blue", alpha=0.6, label="method, cold (first frame)")
         on_front = np.asarray(table.column("pareto"), dtype=bool)
         front = np.flatnonzero(cm & on_front)
         front = front[np.argsort(times[front], kind="stable")]
-        ax.plot(times[front], errors[front], "-o", color="tab:blue", markersize=4,
-                label="Pareto front")
+        ax.plot(times[front], errors[front], "-", color="tab:blue", linewidth=1.2,
+                label="Pareto front (warm)")
         ref = np.flatnonzero(series == "reference")
         if ref.size:
             ref = ref[np.argsort(times[ref])]
-            ax.plot(times[ref], errors[ref], "-s", color="tab:red", markersize=4,
-                    label="reference (Mitsuba) error vs warm time")
+            ax.errorbar(times[ref], errors[ref], yerr=[below[ref], above[ref]], fmt="-s",
+                        color="tab:red", markersize=3, elinewidth=0.7,
+                        label="reference (Mitsuba), warm")
             ax.plot(cold_times[ref], errors[ref], "--", color="tab:red", alpha=0.6,
                     label="reference, cold (build + compile + warm)")
         title = "Cost versus accuracy"
         if speedup is not None and _positive(speedup.speedup, speedup.reference_time):
             method_time, method_error = _speedup_point(speedup, point, times[front], errors[front])
-            title += f" — equal-error speedup {speedup.speedup:.4g}× warm ({speedup.kind})"
+            title += f"\nequal-error speedup {speedup.text} warm ({speedup.kind})"
             if cold is not None:
-                title += f", {cold.speedup:.3g}× cold"
+                title += f", {cold.text} cold"
             if _positive(method_time, method_error):
                 ax.annotate("", xy=(speedup.reference_time, method_error),
                             xytext=(method_time, method_error),
@@ -205,11 +229,74 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
                         label=f"reference at equal error ({speedup.reference_time:.3g} s)")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("warm time (s): the passes producing the receiver maps")
-        ax.set_ylabel("relMSE")
-        ax.set_title(title)
+        ax.set_xlabel("time (s): the passes producing the receiver maps")
+        ax.set_ylabel(f"{label} (receiver 0, caustic region)")
+        ax.set_title(title, fontsize=8)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=7)
+    return figure
+
+
+def scene_cost_figure(scene: str, tables: dict[str, Table]):
+    """What accuracy costs on one scene, every method on the same axes: each method's
+    point at the scene's settings (its cost table's first method row), warm (filled)
+    and cold (hollow), excess relMSE with its 95 % interval as a bar, and the
+    reference's own error-versus-time curve warm and cold (from the first table that
+    has it: every method of a scene is scored against the same reference).
+
+    Parameters
+    ----------
+    scene : str
+        The scene's name (the title).
+    tables : dict of str to Table
+        Method name to its cost table (columns in ``SceneComparison.cost``).
+    """
+    plt = _pyplot()
+    markers = "osD^v<>"
+    with plt.rc_context(_RC):
+        figure, ax = plt.subplots(figsize=(6.0, 4.2))
+        ax.set_title(f"{scene}: what accuracy costs", fontsize=9)
+        drawn = False
+        reference = next((t for t in tables.values()
+                          if "reference" in t.column("series")), None)
+        if reference is not None:
+            series = np.array(reference.column("series"))
+            errors, below, above = _excess_column(reference)
+            ref = np.flatnonzero(series == "reference")
+            warm = _loggable(_float(reference.column("time_warm_s")))
+            cold = _loggable(_float(reference.column("time_cold_s")))
+            ref = ref[np.argsort(warm[ref])]
+            ax.errorbar(warm[ref], errors[ref], yerr=[below[ref], above[ref]], fmt="-s",
+                        color="tab:red", markersize=3, elinewidth=0.7,
+                        label="reference (Mitsuba), warm")
+            ax.plot(cold[ref], errors[ref], "--", color="tab:red", alpha=0.6,
+                    label="reference, cold")
+            drawn = bool(np.isfinite(errors[ref]).any())
+        for i, (method, table) in enumerate(tables.items()):
+            series = np.array(table.column("series"))
+            mine = np.flatnonzero(series != "reference")
+            if not mine.size:
+                continue
+            row = mine[:1]
+            errors, below, above = _excess_column(table)
+            warm = _loggable(_float(table.column("time_warm_s")))[row]
+            cold = _loggable(_float(table.column("time_cold_s")))[row]
+            colour = f"C{i}"
+            ax.errorbar(warm, errors[row], yerr=[below[row], above[row]],
+                        fmt=markers[i % len(markers)], color=colour, markersize=5,
+                        elinewidth=0.8, capsize=2, label=f"{method}, warm")
+            ax.scatter(cold, errors[row], s=30, marker=markers[i % len(markers)],
+                       facecolors="none", edgecolors=colour, label=f"{method}, cold")
+            drawn = drawn or bool(np.isfinite(errors[row]).any())
+        if not drawn:
+            _no_data(ax, "no method or reference point with a finite, positive error")
+            return figure
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("time (s): the passes producing the receiver maps")
+        ax.set_ylabel("excess relMSE (receiver 0, caustic region)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
     return figure
 
 

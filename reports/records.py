@@ -25,6 +25,7 @@ vertically for display so +v points up.
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
@@ -57,6 +58,7 @@ __all__ = [
     "SpeedupWithheld",
     "StudySection",
     "Table",
+    "slower",
 ]
 
 #: Human-readable formula of each metric, shown beside its value in every output.
@@ -68,7 +70,16 @@ METRIC_FORMULAS: dict[str, str] = {
             "K1 = 0.01, K2 = 0.03) of Reinhard + sRGB tone-mapped images, data_range 1",
     "flip": "mean HDR-FLIP (Andersson et al. 2021) with the scene's fixed exposure range",
     "flux_ratio": "Σ luminance(method) / Σ luminance(ref) over the region (1 = energy kept)",
+    "stray_flux": "Σ luminance(method) outside the scene's caustic region / Σ luminance(ref) "
+                  "over the whole map (excess: minus the reference's own share there)",
 }
+
+
+def slower(speedup: float) -> bool:
+    """Whether an equal-error speedup means the method is slower than the reference
+    at the same error (a finite, positive speedup below 1): it then reads "1.6×
+    slower", never "0.62× speedup"."""
+    return math.isfinite(speedup) and 0 < speedup < 1
 
 
 @dataclass(frozen=True)
@@ -106,14 +117,18 @@ class EqualErrorSpeedup:
 
     @property
     def text(self) -> str:
-        """``12.3× (95 % [9.8, 15.1])``, ``at least 40×`` or ``at most 2×``."""
+        """``12.3× (95 % [9.8, 15.1])``, ``1.6× slower (speedup 0.625×, 95 % [0.5,
+        0.8])``, ``at least 40×`` or ``at most 2×``."""
         if self.bound_kind == "lower bound":
             return f"at least {self.speedup:.3g}×"
         if self.bound_kind == "upper bound" or self.kind == "bound":
             return f"at most {self.speedup:.3g}×"
-        if self.low == self.low and self.high == self.high:  # not NaN
-            return f"{self.speedup:.3g}× (95 % [{self.low:.3g}, {self.high:.3g}])"
-        return f"{self.speedup:.3g}×"
+        interval = (f"95 % [{self.low:.3g}, {self.high:.3g}]"
+                    if self.low == self.low and self.high == self.high else "")  # not NaN
+        if slower(self.speedup):
+            inside = ", ".join(p for p in (f"speedup {self.speedup:.3g}×", interval) if p)
+            return f"{1 / self.speedup:.3g}× slower ({inside})"
+        return f"{self.speedup:.3g}×" + (f" ({interval})" if interval else "")
 
 
 @dataclass(frozen=True)
@@ -217,11 +232,13 @@ class MetricValue:
     view : str
         ``camera`` or ``receiver<i>``.
     region : str
-        ``full`` (the whole receiver map or image), ``caustic`` (the union of the
-        method's caustic region and an independent reference's: never the scored
-        reference's own, which would select on its noise), ``object`` (camera pixels
-        inside a caustic object's silhouette: the object seen through) or
-        ``object_masked`` (camera without the object and its silhouette).
+        ``full`` (the whole receiver map or image), ``caustic`` (the scene's caustic
+        region: thresholded on the independent reference alone, the same texels for
+        every method; never the scored reference's own, which would select on its
+        noise), ``outside`` (the receiver map outside it: ``stray_flux`` only),
+        ``object`` (camera pixels inside a caustic object's silhouette: the object
+        seen through) or ``object_masked`` (camera without the object and its
+        silhouette).
     metric : str
         A key of :data:`METRIC_FORMULAS`.
     value : float
@@ -242,6 +259,8 @@ class MetricValue:
         Its 95 % interval.
     distinguishable : bool or None
         Whether the interval excludes 0: the method is measurably off the truth.
+    pixels : int or None
+        The size of the region the value was computed over (texels or pixels).
     """
 
     view: str
@@ -254,6 +273,21 @@ class MetricValue:
     excess_stderr: float | None = None
     excess_ci95: tuple[float, float] | None = None
     distinguishable: bool | None = None
+    pixels: int | None = None
+
+    @property
+    def verdict(self) -> str:
+        """``measurably off`` (the interval lies above 0; below 0 for a flux measure),
+        ``within noise`` (the interval contains 0), ``variance overstated`` (an excess
+        error wholly below 0, which no method can score) or ``no interval``."""
+        if self.excess_ci95 is None:
+            return "no interval"
+        low, high = self.excess_ci95
+        if low <= 0 <= high:
+            return "within noise"
+        if high < 0 and self.metric in ("relmse", "ssim", "flip"):
+            return "variance overstated"
+        return "measurably off"
 
     @property
     def interval_text(self) -> str:
@@ -316,7 +350,8 @@ class Check:
     value : float
         The measured value.
     passed : bool
-        Whether the value kept the bound.
+        Whether the check holds: the value kept the bound, or, for a check judged
+        from an interval, the whole interval did.
     origin : str
         Where the bound comes from: its derivation, the reason for a target, or the
         calibration of a lock.
@@ -327,6 +362,13 @@ class Check:
     gap : str
         Set when the check is a known miss (an expected failure whose reason names
         the gap).
+    interval : (float, float) or None
+        The value's 95 % interval where the measure has one (an excess error under
+        the reference's noise): the check is judged from it (:attr:`verdict`).
+    verdict : str
+        ``holds`` (the interval, or the value, keeps the bound), ``fails`` (the
+        interval, or the value, breaks it) or ``undecided`` (the interval straddles
+        the bound: more reference photons would decide it). Empty: from ``passed``.
     """
 
     metric: str
@@ -340,14 +382,30 @@ class Check:
     kind: str = "regression lock"
     subject: str = "method"
     gap: str = ""
+    interval: tuple[float, float] | None = None
+    verdict: str = ""
+
+    @property
+    def decision(self) -> str:
+        """:attr:`verdict`, or ``holds``/``fails`` from :attr:`passed`."""
+        return self.verdict or ("holds" if self.passed else "fails")
 
     @property
     def outcome(self) -> str:
-        """``pass``, ``FAIL``, ``known gap`` (failed as expected) or ``gap closed``
-        (a known gap that now passes: the gap entry should go)."""
+        """``pass``, ``FAIL``, ``undecided`` (the interval straddles the bound),
+        ``known gap`` (a known gap that does not hold) or ``gap closed`` (a known gap
+        that now holds: the gap entry should go)."""
+        decision = self.decision
         if self.gap:
-            return "gap closed" if self.passed else "known gap"
-        return "pass" if self.passed else "FAIL"
+            return "gap closed" if decision == "holds" else "known gap"
+        return {"holds": "pass", "undecided": "undecided"}.get(decision, "FAIL")
+
+    @property
+    def interval_text(self) -> str:
+        """``[low, high]`` of the value's 95 % interval ('' when it has none)."""
+        if self.interval is None:
+            return ""
+        return f"[{self.interval[0]:.4g}, {self.interval[1]:.4g}]"
 
     @property
     def bound_text(self) -> str:

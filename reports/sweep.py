@@ -48,7 +48,8 @@ class SweepRow:
     setting : tuple of (str, str)
         The grid's settings of this row, as shown.
     values : dict of str to float
-        ``relmse``, ``ssim``, ``flip``, ``flux_ratio``, ``relmse_noise_floor``.
+        ``excess_<m>``, ``excess_<m>_low``, ``excess_<m>_high`` and ``<m>`` for ``m`` in
+        ``relmse``, ``ssim``, ``flip``, ``flux_ratio``; ``relmse_noise_floor``.
     time_warm_ms : float or None
     worker : str
     cached : bool
@@ -111,42 +112,54 @@ def _positive(value: float | None) -> bool:
 
 
 def sweep_figure(rows: Sequence[SweepRow], *, title: str):
-    """relMSE against warm frame time (ms), log-log: each method's rows with its own
-    marker, the Pareto front joined in time order, the median noise floor (the
-    relMSE of an independent reference) dashed. Rows without a finite, positive
-    pair are left out, and a panel with none says so."""
+    """Excess relMSE (the method's own error against the noise-free image) against warm
+    frame time (ms), log-log: each method's rows with its own marker and the 95 %
+    interval as an error bar, the Pareto front joined in time order. Rows without a
+    finite, positive pair are left out (an excess within noise may be ≤ 0: it is
+    drawn at its interval's upper end, marked as an upper bound), and a panel with
+    none says so."""
     plt = plots._pyplot()
     with plt.rc_context(plots._RC):
         figure, ax = plt.subplots(figsize=(5.5, 3.8))
         ax.set_title(title)
         points = [r for r in rows if _positive(r.time_warm_ms)
-                  and _positive(r.values.get("relmse"))]
+                  and _positive(_shown(r))]
         if not points:
-            plots._no_data(ax, "no row has a finite, positive time and relMSE")
+            plots._no_data(ax, "no row has a finite, positive time and excess relMSE")
             return figure
         for i, method in enumerate(dict.fromkeys(r.method for r in points)):
             mine = [r for r in points if r.method == method]
-            ax.scatter([r.time_warm_ms for r in mine], [r.values["relmse"] for r in mine],
-                       marker=_MARKERS[i % len(_MARKERS)], s=22, alpha=0.8, label=method)
+            y = np.array([_shown(r) for r in mine])
+            low = np.array([r.values.get("excess_relmse_low", np.nan) for r in mine], float)
+            high = np.array([r.values.get("excess_relmse_high", np.nan) for r in mine], float)
+            below = np.where(np.isfinite(low) & (low > 0), y - low, 0.0)
+            above = np.where(np.isfinite(high) & (high > y), high - y, 0.0)
+            ax.errorbar([r.time_warm_ms for r in mine], y, yerr=[below, above],
+                        fmt=_MARKERS[i % len(_MARKERS)], markersize=4, alpha=0.8,
+                        elinewidth=0.8, capsize=2, label=method)
         front = sorted((r for r in points if r.pareto), key=lambda r: r.time_warm_ms)
         if front:
-            ax.plot([r.time_warm_ms for r in front], [r.values["relmse"] for r in front],
+            ax.plot([r.time_warm_ms for r in front], [_shown(r) for r in front],
                     "-", color="0.25", linewidth=1, label="Pareto front")
             for r in front:
-                ax.annotate(r.label, (r.time_warm_ms, r.values["relmse"]), fontsize=5,
+                ax.annotate(r.label, (r.time_warm_ms, _shown(r)), fontsize=6,
                             xytext=(3, 3), textcoords="offset points", color="0.25")
-        floors = [r.values.get("relmse_noise_floor") for r in points]
-        floors = [f for f in floors if _positive(f)]
-        if floors:
-            ax.axhline(float(np.median(floors)), linestyle="--", color="tab:red", linewidth=1,
-                       label="reference noise floor")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("warm frame time (ms)")
-        ax.set_ylabel("relMSE (receiver 0, caustic region)")
+        ax.set_ylabel("excess relMSE (receiver 0, caustic region)")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=7)
     return figure
+
+
+def _shown(row: SweepRow) -> float:
+    """The excess relMSE drawn for ``row``: the estimate, or its interval's upper end
+    where the estimate is not positive (within noise)."""
+    value = row.values.get("excess_relmse", float("nan"))
+    if _positive(value):
+        return value
+    return row.values.get("excess_relmse_high", float("nan"))
 
 
 def write_sweep_index(out_dir: str | Path, index: SweepIndex) -> Path:

@@ -71,14 +71,16 @@ class Checked:
 
 
 def count_by_kind(checks) -> dict[str, dict[str, int]]:
-    """Per kind (:data:`reports.records.CHECK_KINDS`): checked, passed, failed and
-    known gaps (a known gap is neither passed nor failed)."""
+    """Per kind (:data:`reports.records.CHECK_KINDS`): checked, passed, failed,
+    undecided (the interval straddles the bound) and known gaps (a known gap is
+    neither passed nor failed)."""
     out = {}
     for kind in CHECK_KINDS:
         mine = [c for c in checks if c.kind == kind]
         out[kind] = {"checked": len(mine),
                      "passed": sum(1 for c in mine if c.outcome in ("pass", "gap closed")),
                      "failed": sum(1 for c in mine if c.outcome == "FAIL"),
+                     "undecided": sum(1 for c in mine if c.outcome == "undecided"),
                      "known gaps": sum(1 for c in mine if c.outcome == "known gap")}
     return out
 
@@ -107,7 +109,7 @@ def _unchanged(scene: Scene, method: Method, scenes_dir: Path) -> bool:
 def comparison_checks(scene: Scene, method: Method, *, geometry: SceneGeometry,
                       images: dict[str, np.ndarray], stability: dict | None,
                       status_counts: dict | None, files: CheckFiles, scenes_dir: Path,
-                      golden_dir: Path, ctx=None) -> Checked:
+                      golden_dir: Path, metrics=(), ctx=None) -> Checked:
     """All checks of one comparison (module docstring).
 
     Parameters
@@ -128,6 +130,9 @@ def comparison_checks(scene: Scene, method: Method, *, geometry: SceneGeometry,
         The caustics-mapping per-status vertex counts (method targets on them).
     files : CheckFiles
         Locks, targets and gaps.
+    metrics : sequence of MetricValue
+        The comparison's records: the method targets on relMSE quote (and are judged
+        from the interval of) its ``receiver0 / caustic / relmse`` record.
     scenes_dir, golden_dir : Path
         The committed scenes and the golden references.
     """
@@ -158,12 +163,16 @@ def comparison_checks(scene: Scene, method: Method, *, geometry: SceneGeometry,
     if why is None and not _unchanged(scene, method, scenes_dir):
         why = "settings differ from the committed scene's"
     if why is None:
-        measures = target_measures(reference_maps[0], method_maps[0], stability=stability,
-                                   status_counts=status_counts)
+        relmse = next((m for m in metrics
+                       if (m.view, m.region, m.metric) == ("receiver0", "caustic", "relmse")),
+                      None)
+        measures, intervals = target_measures(reference_maps[0], method_maps[0],
+                                              relmse=relmse, stability=stability,
+                                              status_counts=status_counts)
         if exact is not None:
             measures.update(camera_measures(exact, images["camera/method"]))
         checks += check_targets(files.targets, scene=scene.name, method=method.name,
-                                measures=measures)
+                                measures=measures, intervals=intervals)
     else:
         not_applied["method target"] = why
     why = golden_applies(scene, scenes_dir, golden_dir)

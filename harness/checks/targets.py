@@ -9,7 +9,10 @@ Measures (the keys of :data:`harness.checks.bounds.MEASURES`), each of the recei
 map named by the target's ``view``:
 
 ``relmse``
-    relMSE over the reference's caustic region (``reports.records.METRIC_FORMULAS``).
+    The excess relMSE (against the noise-free image, ``harness.metrics.excess``) over
+    the scene's caustic region, with its 95 % interval: the comparison's own
+    ``receiver0 / caustic / relmse`` record, so the check quotes the page's number.
+    The check is judged from the interval (:func:`harness.checks.bounds.judge`).
 ``flux_ratio``
     Σ E(method) / Σ E(reference) over the map, per channel; the channel furthest
     from 1.
@@ -34,13 +37,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import uniform_filter
 
-from harness.checks.bounds import Target, holds
+from harness.checks.bounds import Target, judge
 from harness.compare.evaluate import score_value
-from harness.compare.regions import caustic_region
+from harness.compare.uncertainty import ExcessInputs, metric_excess
 from reports.display import luminance
-from reports.records import Check
+from reports.records import Check, MetricValue
 
-__all__ = ["TARGET", "check_targets", "focus_measures", "target_measures"]
+__all__ = ["TARGET", "caustic_relmse", "check_targets", "focus_measures", "target_measures"]
 
 TARGET = "method target"
 #: Radius (m) of the focus share.
@@ -61,12 +64,52 @@ def focus_measures(reference: np.ndarray, method: np.ndarray, extent, *,
             float(met[near].sum() / met.sum()))
 
 
-def target_measures(reference, method, *, stability: dict | None = None,
-                    status_counts: dict | None = None) -> dict[str, float]:
-    """Every measure of one receiver map (ReceiverMaps ``reference`` and ``method``)
-    that the inputs allow."""
+def caustic_relmse(reference, method, region: np.ndarray, *, seeds: int,
+                   channel_correlation: float = 1.0, view: str = "receiver0") -> MetricValue:
+    """The ``caustic / relmse`` record of one receiver map, as the comparison scores it
+    (the same estimator, :func:`harness.compare.uncertainty.metric_excess`), for a
+    check made outside a comparison.
+
+    Parameters
+    ----------
+    reference, method : ReceiverMap
+        The reference (with its variance of the mean) and the method's map.
+    region : ndarray (H, W) of bool
+        The scene's caustic region (``harness.compare.regions.scene_caustic_region``).
+    seeds : int
+        K, the seeds behind the reference's variance.
+    channel_correlation : float
+        1 when the same photons carry all three channels, 0 for one pass per channel.
+    """
     ref, met = np.asarray(reference.irradiance), np.asarray(method.irradiance)
-    out = {"relmse": score_value("relmse", met, ref, mask=caustic_region(ref), exposure=None)}
+    mask = np.asarray(region, bool)
+    inputs = ExcessInputs(np.asarray(reference.variance), int(seeds), channel_correlation,
+                          1.0, 0.0, 0.0)
+    excess = metric_excess("relmse", met, ref, mask, inputs, maps={})
+    return MetricValue(view, "caustic", "relmse",
+                       score_value("relmse", met, ref, mask=mask, exposure=None),
+                       pixels=int(mask.sum()), **excess)
+
+
+def target_measures(reference, method, *, relmse: MetricValue | None = None,
+                    stability: dict | None = None, status_counts: dict | None = None
+                    ) -> tuple[dict[str, float], dict[str, tuple[float, float]]]:
+    """Every measure of one receiver map (ReceiverMaps ``reference`` and ``method``)
+    that the inputs allow, and the 95 % intervals of those that have one.
+
+    Parameters
+    ----------
+    relmse : MetricValue, optional
+        The comparison's ``caustic / relmse`` record of this map (or
+        :func:`caustic_relmse`): the ``relmse`` measure is its excess and interval;
+        without it (or without an excess) there is no ``relmse`` measure.
+    """
+    ref, met = np.asarray(reference.irradiance), np.asarray(method.irradiance)
+    out, intervals = {}, {}
+    if relmse is not None and relmse.excess is not None:
+        out["relmse"] = float(relmse.excess)
+        if relmse.excess_ci95 is not None:
+            intervals["relmse"] = tuple(float(x) for x in relmse.excess_ci95)
     ref_flux, met_flux = reference.total_flux(), method.total_flux()
     lit = ref_flux > 0
     if lit.any():
@@ -80,24 +123,30 @@ def target_measures(reference, method, *, stability: dict | None = None,
             out[key] = float(stability[key])
     if status_counts:
         out["object_vertices"] = float(sum(v for k, v in status_counts.items() if k != "empty"))
-    return out
+    return out, intervals
 
 
 def _provenance(t: Target) -> str:
     return t.reason + (f" (the {t.contrast} preset misses it)" if t.contrast else "")
 
 
-def check_targets(targets, *, scene: str, method: str,
-                  measures: dict[str, float]) -> list[Check]:
-    """The targets of ``scene`` and ``method``; a measure the inputs did not allow
-    is NaN, which fails."""
+def check_targets(targets, *, scene: str, method: str, measures: dict[str, float],
+                  intervals: dict[str, tuple[float, float]] | None = None) -> list[Check]:
+    """The targets of ``scene`` and ``method``, each judged from its measure's 95 %
+    interval where ``intervals`` has one (:func:`harness.checks.bounds.judge`: holds,
+    fails or undecided), else from the value; a measure the inputs did not allow is
+    NaN, which fails."""
     checks = []
+    intervals = intervals or {}
     for t in targets:
         if t.scene != scene or t.method != method:
             continue
         value = measures.get(t.metric, float("nan"))
+        interval = intervals.get(t.metric)
+        verdict = judge(t.kind, t.bound, value, interval)
         checks.append(Check(
             metric=t.metric, region=t.region, view=t.view, bound=t.bound, relation=t.kind,
-            value=value, passed=holds(t.kind, t.bound, value), origin=_provenance(t),
-            kind=TARGET, gap=t.gap))
+            value=value, passed=verdict == "holds", origin=_provenance(t),
+            kind=TARGET, gap=t.gap, interval=interval,
+            verdict=verdict if interval is not None else ""))
     return checks

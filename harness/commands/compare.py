@@ -21,15 +21,33 @@ from harness.api import compare as compare_scenes
 from harness.checks import KINDS
 from harness.checks.run import count_by_kind
 from harness.commands.scene import load_scenes
+from harness.compare.consistency import disagreements as output_disagreements
 from harness.compare.pipeline import CompareOptions, default_studies, known_studies
 from harness.terminal import markup, plain
 from harness.writable import usable_cache
 from renderers.mitsuba.cache import cache_dir
-from reports.records import SceneFailure
+from reports.records import SceneFailure, slower
 from scenes import Scene, SceneError, default_scene_path, parse_override, with_settings
 
-__all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "compare_options", "headline_lines",
-           "print_summary", "summary_rows"]
+__all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "compare_options", "excess_cell",
+           "headline_lines", "print_summary", "summary_rows"]
+
+def excess_cell(m) -> str:
+    """One metric for the summary: the method's own (excess) error with its 95 %
+    interval first, a mark when the interval excludes 0 (``OFF``: measurably off the
+    noise-free image), then the raw value; the raw value alone where there is no
+    excess."""
+    if m.excess is None or m.excess_ci95 is None:
+        return f"raw {m.value:.3g} (no interval)"
+    low, high = m.excess_ci95
+    mark = "OFF " if m.verdict == "measurably off" else ""
+    return f"{mark}{m.excess:.3g} [{low:.3g}, {high:.3g}] (raw {m.value:.3g})"
+
+
+def _speed(speedup: float) -> str:
+    """``2.44x``, or ``1.73x slower`` for a speedup below 1."""
+    return f"{1 / speedup:.3g}x slower" if slower(speedup) else f"{speedup:.3g}x"
+
 
 def summary_rows(comparisons) -> list[tuple[str, ...]]:
     """One row per scene: the key numbers of the one-screen summary (plain text: the
@@ -37,7 +55,7 @@ def summary_rows(comparisons) -> list[tuple[str, ...]]:
     rows = []
     for c in comparisons:
         if isinstance(c, SceneFailure):
-            rows.append((c.name, c.method, "FAILED", *("–",) * 6))
+            rows.append((c.name, c.method, "FAILED", *("–",) * 5))
             continue
 
         def value(metric, view="receiver0", region="caustic", c=c):
@@ -45,23 +63,22 @@ def summary_rows(comparisons) -> list[tuple[str, ...]]:
                 m = c.metric(view, region, metric)
             except KeyError:
                 return "–"
-            floor = "" if m.noise_floor is None else f" ({m.noise_floor:.3g})"
-            return f"{m.value:.3g}{floor}"
+            return excess_cell(m)
 
         timing = c.provenance.method
         # The speedup's own scope (receiver-map passes) where there is one.
         frame = (timing.maps_time_ms if timing.maps_time_ms is not None
                  else timing.frame_time_ms)
-        speedup = (f"{c.speedup.speedup:.3g}x / {c.speedup_cold.speedup:.3g}x"
+        speedup = (f"{_speed(c.speedup.speedup)} / {_speed(c.speedup_cold.speedup)}"
                    if c.speedup and c.speedup_cold else "–")
         if c.speedup_withheld is not None:  # not meaningful (harness.compare.headlines)
             speedup = f"withheld: {c.speedup_withheld.short}"
-        passed = sum(t.passed for t in c.checks)
+        passed = sum(t.outcome in ("pass", "gap closed") for t in c.checks)
         gaps = sum(t.outcome == "known gap" for t in c.checks)
         bounds = (f"{passed}/{len(c.checks)}"
                   + (f" ({gaps} known gap{'s' if gaps > 1 else ''})" if gaps else "")
                   if c.checks else "–")
-        rows.append((c.name, c.method, value("relmse"), value("ssim"), value("flip"),
+        rows.append((c.name, c.method, value("relmse"), value("ssim"),
                      value("flux_ratio", region="full"),
                      f"{frame:.1f}" if frame is not None and math.isfinite(frame) else "–",
                      speedup, bounds))
@@ -88,6 +105,8 @@ def check_count_lines(comparisons) -> list[str]:
         parts = [f"{n['passed']} passed"]
         if n["failed"]:
             parts.append(f"{n['failed']} FAILED")
+        if n["undecided"]:
+            parts.append(f"{n['undecided']} undecided")
         if n["known gaps"]:
             gaps = n["known gaps"]
             parts.append(f"{gaps} known gap{'s' if gaps > 1 else ''}")
@@ -98,17 +117,22 @@ def check_count_lines(comparisons) -> list[str]:
 def print_summary(comparisons, out_dir: Path, seconds: float) -> None:
     # Every cell may hold text from a scene file: escaped, or `[/]` is Rich markup.
     table = Table(title=markup(f"methods vs Mitsuba ({seconds:.0f} s) -> {out_dir}/index.html"),
-                  caption="receiver 0, caustic region; (noise floor: an independent "
-                  "reference seed vs the reference)")
-    for column in ("scene", "method", "relMSE", "SSIM", "FLIP", "flux ratio (full)",
+                  caption="receiver 0, the scene's caustic region (the same texels for "
+                  "every method): the method's own error against the noise-free image "
+                  "[95 % interval], OFF when the interval excludes 0, then the raw value "
+                  "against the reference; SSIM: the deficit below a perfect method's; "
+                  "flux: ratio − 1 (FLIP and the camera: on the pages)")
+    for column in ("scene", "method", "excess relMSE", "SSIM deficit",
+                   "flux ratio − 1 (full)",
                    "maps ms (warm)", "equal-error speedup (warm / cold)", "checks passed"):
         table.add_column(column)
     for row in summary_rows(comparisons):
         table.add_row(*(markup(cell) for cell in row))
-    # A pipe or a log gets a wide table rather than rich's 80-column default.
+    # A pipe or a log gets a wide table rather than rich's 80-column default: each
+    # metric cell holds its excess, interval and raw value on one line.
     console = Console()
     if not console.is_terminal:
-        console = Console(width=160)
+        console = Console(width=250)
     console.print(table)
     for line in check_count_lines(comparisons):
         console.print(markup(line))
@@ -153,8 +177,9 @@ def compare(args: argparse.Namespace) -> int:
     """``caustics compare``: load, isolate each scene and method, run the comparison
     pipeline (:func:`harness.compare.pipeline.run_comparison`), write.
 
-    Returns 0; 1 when a scene failed (its row and page say why) or a checks file is
-    missing; 3 when an accuracy check failed (not a known gap) and
+    Returns 0; 1 when a scene failed (its row and page say why), a checks file is
+    missing, or two written copies of one number disagree
+    (:mod:`harness.compare.consistency`); 3 when an accuracy check failed (not a known gap) and
     ``--fail-on-checks`` asks for it; 2 for an unknown study.
     """
     start = time.perf_counter()
@@ -190,7 +215,14 @@ def compare(args: argparse.Namespace) -> int:
         return 2
     items = result.records
     print_summary(items, Path(args.output), time.perf_counter() - start)
-    if result.failures:
+    # One number per question: every copy written of a quantity agrees with its record.
+    disagreements = output_disagreements(Path(args.output))
+    for line in disagreements:
+        print(f"error: inconsistent output: {plain(line)}", file=sys.stderr)
+    if not disagreements:
+        print("consistency: every number on the pages and in the tables agrees with "
+              "metrics.json")
+    if result.failures or disagreements:
         return 1
     failed = [c for item in items for c in item.failed_checks]
     return 3 if failed and args.fail_on_checks else 0

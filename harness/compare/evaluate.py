@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from harness.compare.stray import stray_flux_value
 from harness.compare.uncertainty import ExcessInputs, metric_excess
 from harness.metrics import (
     MetricInputError,
@@ -103,7 +104,9 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
         (H, W, 3) linear images: the method, the reference mean, and an independent
         reference of other seeds (``None`` skips the noise floor).
     regions
-        Region name to boolean (H, W) mask; empty masks are skipped.
+        Region name to boolean (H, W) mask; empty masks are skipped. A ``caustic``
+        region (the scene's, ``harness.compare.regions``) adds the ``stray_flux``
+        record over its complement (:mod:`harness.compare.stray`).
     variance, seeds
         The variance of the reference's mean per texel and channel, and the seeds K
         it comes from (None: no excess errors).
@@ -136,7 +139,14 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
                                     exposure=exposure)
             excess = metric_excess(metric, method, reference, mask, inputs,
                                    maps={"ssim": ssim_map, "flip": flip_map})
-            values.append(MetricValue(view, region, metric, value, floor, **excess))
+            values.append(MetricValue(view, region, metric, value, floor, **excess,
+                                      pixels=int(mask.sum())))
+    caustic = regions.get("caustic")
+    if caustic is not None and np.asarray(caustic, bool).any():
+        stray = stray_flux_value(view, method, reference, caustic, variance=variance,
+                                 seeds=seeds, channel_correlation=channel_correlation)
+        if stray is not None:
+            values.append(stray)
     # SSIM and FLIP lie in [-1, 1] and [0, 1]: their maps are kept (and written,
     # ``harness.compare.outputs``) at half precision, absolute error at most 2.4e-4,
     # so the file, the page's data and the record hold the same values. The metrics

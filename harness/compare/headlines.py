@@ -82,14 +82,14 @@ def _curve_errors(comparison: SceneComparison) -> list[float]:
 
 
 def _method_error(comparison: SceneComparison, *, bound: bool) -> float:
-    """The error the speedup is computed at: the scene settings' excess relMSE in the
-    cost table (its interval's upper end for a lower bound), else the raw relMSE of
-    the speedup's point."""
-    rows = [r for r in comparison.cost.records() if r["series"] != "reference"]
+    """The error the speedup is computed at: the comparison's own excess relMSE
+    (receiver 0, caustic region; its interval's upper end for a lower bound), the
+    number every table quotes; else the raw relMSE of the speedup's point."""
+    relmse = _relmse(comparison)
     error = None
-    if rows and "excess" in comparison.cost.columns:
-        high = rows[0].get("excess_high")
-        error = float(high) if bound and high is not None else _column(rows[0])
+    if relmse is not None and relmse.excess is not None:
+        error = (float(relmse.excess_ci95[1]) if bound and relmse.excess_ci95 is not None
+                 else float(relmse.excess))
     if error is None and comparison.speedup_point is not None:
         error = comparison.speedup_point[1]
     return math.nan if error is None else error
@@ -115,18 +115,19 @@ def speedup_reason(error: float, measurably_off: bool | None, kind: str,
     if measurably_off is False and bound_kind != "lower bound":
         return ("not measurably off",
                 f"the method is not measurably off the noise-free image (its excess relMSE's "
-                f"95 % interval contains 0; raw relMSE {error:.3g}): the reference's curve "
+                f"95 % interval contains 0; excess relMSE {error:.3g}): the reference's curve "
                 "cannot be read at an error the comparison cannot tell from zero")
     if kind == "bound":
         return ("reference curve does not reach the error",
                 f"the reference's cheapest budget is already more accurate than the method "
-                f"(relMSE {error:.3g} against the curve's largest "
+                f"(excess relMSE {error:.3g} against the curve's largest "
                 f"{max(curve_errors, default=math.nan):.3g}): the curve does not reach "
                 "this error, so the speedup would only be an upper bound")
     best = min(curve_errors, default=math.nan)
     if kind == "extrapolated" and math.isfinite(best) and error < best / EXTRAPOLATION_LIMIT:
         return (f"extrapolated past {EXTRAPOLATION_LIMIT:g}x the curve",
-                f"the method's relMSE {error:.3g} is more than {EXTRAPOLATION_LIMIT:g}x below "
+                f"the method's excess relMSE {error:.3g} is more than "
+                f"{EXTRAPOLATION_LIMIT:g}x below "
                 f"the reference curve's best {best:.3g}: past the reference's own photon "
                 "count, where the 1/t extrapolation is not measured")
     return None
@@ -160,6 +161,11 @@ def _verdict_headline(comparison: SceneComparison) -> list[Headline]:
     if relmse.distinguishable and relmse.excess > 0:
         return [Headline("verdict", "note",
                          f"Measurably off the noise-free image: {numbers}.")]
+    if relmse.verdict == "variance overstated":
+        return [Headline("verdict", "warning", (
+            f"The method's excess error lies wholly below 0: {numbers}. No method can "
+            "score below a perfect one, so the reference's variance is overstated here "
+            "and the interval says nothing about the method."))]
     return [Headline("verdict", "warning", (
         f"Not measurably off the noise-free image at this reference noise: {numbers}; the "
         "interval contains 0, so the comparison cannot tell the method from the truth. A "
@@ -194,7 +200,9 @@ def _checks_headline(comparison: SceneComparison) -> list[Headline]:
     failed = comparison.failed_checks
     if not failed:
         return []
-    cited = "; ".join(f"{c.label} = {c.value:.4g}, bound {c.bound_text}" for c in failed)
+    cited = "; ".join(f"{c.label} = {c.value:.4g}"
+                      + (f" (95 % {c.interval_text})" if c.interval is not None else "")
+                      + f", bound {c.bound_text}" for c in failed)
     return [Headline("checks", "warning", (
         f"{len(failed)} accuracy check{'s' if len(failed) > 1 else ''} failed: {cited}."))]
 

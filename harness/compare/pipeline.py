@@ -231,7 +231,7 @@ def run_comparison(scene: Scene, method: Method, *,
                                     stability=stability,
                                     status_counts=render.result.metadata.get("status_counts"),
                                     files=checks.files, scenes_dir=checks.scenes_dir,
-                                    golden_dir=checks.golden_dir)
+                                    golden_dir=checks.golden_dir, metrics=scored.metrics)
         found, not_applied = checked.checks, checked.not_applied
     table = cross = None
     if crosscheck is not None:

@@ -10,7 +10,8 @@ from renderers.results import caustic_region as _reference_region
 from scenes.geometry import SceneGeometry
 from scenes.model import Camera
 
-__all__ = ["CAUSTIC_FRACTION", "caustic_region", "object_mask", "object_region"]
+__all__ = ["CAUSTIC_FRACTION", "caustic_region", "object_mask", "object_region",
+           "scene_caustic_region"]
 
 
 def caustic_region(reference: np.ndarray, *, fraction: float = CAUSTIC_FRACTION) -> np.ndarray:
@@ -22,6 +23,31 @@ def caustic_region(reference: np.ndarray, *, fraction: float = CAUSTIC_FRACTION)
     noise over the same region.
     """
     return _reference_region(reference, fraction=fraction)
+
+
+def scene_caustic_region(independent: np.ndarray) -> np.ndarray:
+    """The caustic region a receiver map is scored over, for every method of a scene:
+    :func:`caustic_region` of the *independent* reference (the K disjoint seeds).
+
+    The region belongs to the scene, not the method: it is computed from references
+    alone, once per scene and receiver, and every method, study, check, figure and
+    sweep row of that scene scores the same texels, so a method that spreads dim light
+    cannot move its own denominator (light it puts outside is scored by the
+    ``full`` region and by the ``stray_flux`` measure). It is not thresholded on the
+    scored reference itself: that keeps the texels its noise pushed up and biases
+    every noise correction (``harness.metrics.excess``); the independent reference's
+    noise is independent of the scored one's.
+
+    Parameters
+    ----------
+    independent : ndarray (H, W, 3)
+        The independent reference's caustic irradiance (W/m²).
+
+    Returns
+    -------
+    ndarray (H, W) of bool
+    """
+    return caustic_region(independent)
 
 
 def _object_hits(camera: Camera, geometry: SceneGeometry) -> np.ndarray:

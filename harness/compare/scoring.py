@@ -10,10 +10,13 @@ budgets (``harness.compare.budget``).
 
 Views: the camera (regions ``full``, ``object`` — the caustic object seen through,
 its silhouette shrunk by a pixel — and ``object_masked``, the rest of the frame) and
-each receiver's irradiance map (regions ``full`` and ``caustic``: the reference above
-its caustic threshold). A ``ptracer`` reference camera cannot see through specular
-surfaces: its ``object`` region is not scored, and a camera it renders black where
-the method is lit is left out with a note.
+each receiver's irradiance map (regions ``full`` and ``caustic``: the scene's caustic
+region, thresholded on the independent reference alone and the same for every method,
+:func:`harness.compare.regions.scene_caustic_region`; and ``outside``, its
+complement, where the ``stray_flux`` record measures light the method puts there).
+A ``ptracer`` reference camera cannot see through specular surfaces: its ``object``
+region is not scored, and a camera it renders black where the method is lit is left
+out with a note.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ import numpy as np
 from harness.checks.stability import stability_summary
 from harness.compare.budget import flux_budget, side_budgets
 from harness.compare.evaluate import exposure_for, score_view
-from harness.compare.regions import caustic_region, object_mask, object_region
+from harness.compare.regions import object_mask, object_region, scene_caustic_region
 from harness.compare.timed import TimedRender
 from renderers.mitsuba.noise import relative_noise_per_channel
 from renderers.results import RenderResult
@@ -38,7 +41,7 @@ from scenes.geometry import SceneGeometry
 
 __all__ = ["NoCausticError", "References", "Scored", "camera_is_blind", "channel_correlation",
            "relative_noise",
-           "require_caustic", "score_render", "scored_caustic", "views_of"]
+           "require_caustic", "score_render", "views_of"]
 
 
 class NoCausticError(HarnessError):
@@ -88,7 +91,8 @@ class Scored:
         Every metric per view and region, with its noise floor.
     images : dict of str to ndarray
         ``<view>/<kind>`` (``reports.records``): method, reference, signed, ssim, flip,
-        masks, and the reference's variance where it has one.
+        masks, and where the reference has a variance, the variance itself, the
+        reference's standard error (``stderr``) and the method's z map (``z``).
     exposure : dict
         Per view: ``white``, ``flip_start``, ``flip_stop``, ``diff_range``.
     files : dict of str to str
@@ -167,23 +171,12 @@ def views_of(scene: Scene, geometry: SceneGeometry, method: RenderResult,
                           reference.metadata.get("camera_variance")))
     for i, (method_map, ref_map, ind_map) in enumerate(zip(
             method.receivers, reference.receivers, independent.receivers, strict=True)):
-        caustic = scored_caustic(method_map.irradiance, ind_map.irradiance)
+        caustic = scene_caustic_region(ind_map.irradiance)
         views.append(View(f"receiver{i}", method_map.irradiance, ref_map.irradiance,
                           ind_map.irradiance,
                           {"full": np.ones(caustic.shape, bool), "caustic": caustic},
                           {"mask_caustic": caustic}, None, ref_map.variance))
     return views, notes
-
-
-def scored_caustic(method: np.ndarray, independent: np.ndarray) -> np.ndarray:
-    """The caustic region a receiver map is scored over: the union of the method's
-    caustic region and an independent reference's (:func:`caustic_region` of each).
-
-    Not the scored reference's own: a region thresholded on the reference keeps the
-    texels where its noise happened to be high, which biases every excess estimate
-    (``harness.metrics.excess``); and light the method puts where the reference has
-    none is error too, so the method's region is in it."""
-    return caustic_region(method) | caustic_region(independent)
 
 
 def relative_noise(reference: np.ndarray, variance: np.ndarray, mask: np.ndarray
@@ -194,6 +187,18 @@ def relative_noise(reference: np.ndarray, variance: np.ndarray, mask: np.ndarray
     (:func:`renderers.mitsuba.noise.relative_noise_per_channel`), here over the region
     the comparison scores."""
     return [float(x) for x in relative_noise_per_channel(reference, variance, mask)]
+
+
+def _noise_maps(view: View) -> dict[str, np.ndarray]:
+    """``<view>/stderr``, the reference mean's standard error per texel and channel
+    (the square root of its variance of the mean; the view's units), and ``<view>/z``,
+    (method − reference) / stderr per texel and channel (0 where the standard error is
+    0: no photon reached the texel in any seed); (H, W, 3) float32 each."""
+    stderr = np.sqrt(np.maximum(np.asarray(view.variance, np.float64), 0.0))
+    difference = np.asarray(view.method, np.float64) - np.asarray(view.reference, np.float64)
+    z = np.divide(difference, stderr, out=np.zeros_like(difference), where=stderr > 0)
+    return {f"{view.name}/stderr": stderr.astype(np.float32),
+            f"{view.name}/z": z.astype(np.float32)}
 
 
 def _score_views(views: list[View], *, seeds: int | None, channel_correlation: float):
@@ -220,6 +225,10 @@ def _score_views(views: list[View], *, seeds: int | None, channel_correlation: f
                                                              mask=view.exposure_mask)
         for kind in ("method", "reference", "signed", "ssim", "flip"):
             files[f"{view.name}/{kind}"] = f"{view.name}_{kind}.exr"
+        if view.variance is not None:
+            images.update(_noise_maps(view))
+            for kind in ("stderr", "z"):
+                files[f"{view.name}/{kind}"] = f"{view.name}_{kind}.exr"
     return tuple(metrics), images, exposure, files
 
 

@@ -32,7 +32,6 @@ from typing import Any, Protocol, runtime_checkable
 from tqdm import tqdm
 
 from harness.compare.evaluate import exposure_for
-from harness.compare.regions import caustic_region
 from harness.compare.scoring import References, Scored, channel_correlation
 from harness.compare.temporal_outputs import temporal_json
 from harness.compare.timed import TimedRender
@@ -97,6 +96,13 @@ class StudyContext:
     options: Any
     sections: dict[str, Section]
 
+    @property
+    def caustic(self):
+        """Receiver 0's caustic region, (H, W) bool: the scene's
+        (:func:`harness.compare.regions.scene_caustic_region`), the texels every record,
+        study and check of the scene scores."""
+        return self.scored.images["receiver0/mask_caustic"]
+
     @contextlib.contextmanager
     def progress(self, total: int, label: str) -> Iterator[Callable[[], None]]:
         """A tick function for a progress bar of ``total`` steps on stderr (a no-op
@@ -147,21 +153,23 @@ class ConvergenceStudy:
         return bool(method.studies)
 
     def run(self, context: StudyContext) -> Section:
-        """Convergence table and claims; the claims use receiver 0's caustic region."""
+        """Convergence table and claims, over receiver 0's scene caustic region."""
         reference = context.references.reference.receivers[0]
-        caustic = caustic_region(reference.irradiance)
+        caustic = context.caustic
         options = context.options
+        seeds = context.references.reference.metadata.get("seeds")
         top = min(options.max_iterations, 4) if options.quick else options.max_iterations
         with context.progress(6 * (top + 1), "convergence") as tick:
             table = convergence_study(context.runner, reference.irradiance, caustic,
                                       max_iterations=top,
                                       exposure=exposure_for(reference.irradiance),
+                                      variance=reference.variance,
+                                      seeds=int(seeds) if seeds else None,
+                                      channel_correlation=channel_correlation(context.scene),
                                       progress=tick)
-        independent = context.references.independent.receivers[0].irradiance
         claims, verdicts = paper_claims(
             table, runner=context.runner, reference=reference, caustic=caustic,
-            independent_region=caustic_region(independent),
-            seeds=context.references.reference.metadata.get("seeds"))
+            seeds=seeds)
         return ConvergenceSection(table, claims, verdicts)
 
 
@@ -179,15 +187,13 @@ class CostStudy:
         """The sweep, the speedups warm and cold, and the timing policy."""
         reference = context.references.reference
         ref0 = reference.receivers[0]
-        independent = context.references.independent.receivers[0].irradiance
         quick = context.options.quick
         seeds = reference.metadata.get("seeds")
         with context.progress(sweep_size(context.runner.settings, quick=quick),
                               "cost sweep") as tick:
-            # Scored over the independent reference's caustic region: a region
-            # thresholded on the scored reference would select its noise.
+            # Scored over the scene's caustic region, as every record of the scene.
             outcome = cost_study(
-                context.runner, ref0.irradiance, caustic_region(independent),
+                context.runner, ref0.irradiance, context.caustic,
                 reference_photons=int(reference.metadata["photons"]), quick=quick,
                 progress=tick, reference_variance=ref0.variance if seeds else None,
                 reference_seeds=int(seeds) if seeds else None,
@@ -247,7 +253,8 @@ class DecompositionStudy:
         dense = None if options.quick else options.dense_grid
         with context.progress(4 + (dense is not None), "decomposition") as tick:
             record = decomposition_study(
-                context.runner, context.references.reference.receivers[0], noise_floor=floor,
+                context.runner, context.references.reference.receivers[0],
+                caustic=context.caustic, noise_floor=floor,
                 options=DecompositionOptions(dense_grid=dense, repeats=options.repeats),
                 progress=tick)
         return RecordSection("decomposition", "Where the error comes from", record,

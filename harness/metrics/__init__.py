@@ -12,6 +12,7 @@ from harness.metrics.scores import (
     flux_ratio,
     peak_signal_to_noise_ratio,
     relative_mse,
+    stray_flux,
     structural_similarity,
 )
 from harness.metrics.temporal import (
@@ -42,6 +43,7 @@ __all__ = [
     "relative_difference",
     "relative_mse",
     "signed_difference",
+    "stray_flux",
     "structural_similarity",
     "temporal_flicker",
     "tonemap",

@@ -14,6 +14,8 @@ FLIP          HDR-FLIP (Andersson et al. 2021) through ``flip-evaluator`` with a
               fixed exposure range [start, stop] so a series is comparable;
               the mean of the FLIP map over the mask.
 flux ratio    Σ method / Σ reference (luminance-weighted), the energy check.
+stray flux    Σ method outside a region / Σ reference over the whole map
+              (luminance-weighted): light put where the scene's caustic is not.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ __all__ = [
     "flux_ratio",
     "peak_signal_to_noise_ratio",
     "relative_mse",
+    "stray_flux",
     "structural_similarity",
 ]
 
@@ -151,3 +154,25 @@ def flux_ratio(method, reference, *, mask=None) -> float:
     if ref_sum <= 0:
         raise MetricInputError("reference holds no energy in the mask")
     return float(luminance(method)[mask].sum()) / ref_sum
+
+
+def stray_flux(method, reference, *, region) -> float:
+    """Σ luminance(method) outside ``region`` / Σ luminance(reference) over the whole map.
+
+    The share of the reference's flux that the method puts where the caustic region
+    is not (the reference's own share there is :func:`stray_flux` of the reference
+    against itself). The region is the scene's (``harness.compare.regions``), so a
+    method that spreads dim light cannot hide it by widening its own region.
+
+    Parameters
+    ----------
+    method, reference : ndarray (H, W, 3)
+        Irradiance maps in the same units (W/m²).
+    region : ndarray (H, W) of bool
+        The caustic region; its complement is scored.
+    """
+    method, reference, inside = _check(method, reference, region)
+    total = float(luminance(reference).sum())
+    if total <= 0:
+        raise MetricInputError("reference holds no energy")
+    return float(luminance(method)[~inside].sum()) / total

@@ -71,16 +71,13 @@ Texels are independent given the photon tracer's nearest-texel deposit, as in
 :mod:`harness.metrics.excess`; the coverage is checked by simulation in
 ``tests/harness/studies/test_claims.py``.
 
-The scored region is the union of the method's own caustic regions after 1 and N
-iterations (:func:`harness.compare.regions.caustic_region` of its maps): those maps
-are deterministic, so the region does not depend on the reference's noise. A region
+The scored region is the scene's caustic region
+(:func:`harness.compare.regions.scene_caustic_region`: thresholded on a reference
+*independent* of the one scored), the texels every method and study of the scene is
+scored on, so the claim quotes the convergence table's excess relMSEs exactly. A region
 thresholded on the reference being scored keeps the texels its noise pushed up and
-biases the excess (:func:`harness.metrics.excess.scored_region`). The price: a texel
-dark in both of the method's maps but bright in the truth is not scored unless a
-region from an *independent* reference is given (``paper_claims``'s
-``independent_region``). The region matters: on glass_sphere at grid 48 the ratio is
-1.38 over the method's 71 texels and 1.43 over the reference's 93 (whose selection
-bias is negligible there, the reference's noise being 0.05 % of the excess).
+biases the excess (``harness.metrics.excess``); one taken from the method's own maps
+would let the method move its own denominator.
 
 Interval of the five-iteration p95 (block bootstrap)
 ----------------------------------------------------
@@ -108,8 +105,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import stdtrit
 
-from harness.compare.regions import caustic_region
-from harness.metrics.excess import ExcessError, excess_relative_mse, scored_region
+from harness.metrics.excess import ExcessError, excess_relative_mse
 from harness.metrics.scores import RELMSE_EPSILON, MetricInputError
 from harness.raycast import ReceiverTracer
 from harness.studies.convergence import classify
@@ -558,7 +554,7 @@ def hit_error_grid(runner, iterations: int) -> np.ndarray:
 
 
 def paper_claims(convergence, *, runner=None, reference=None, caustic=None,
-                 independent_region=None, seeds: int | None = None
+                 seeds: int | None = None
                  ) -> tuple[dict[str, str], tuple[ClaimVerdict, ...]]:
     """Both claims from the convergence study (rows of the plain modified estimator).
 
@@ -574,16 +570,10 @@ def paper_claims(convergence, *, runner=None, reference=None, caustic=None,
         Receiver 0's reference, with ``variance`` (of the mean, per texel and channel):
         needed for the excess relMSEs.
     caustic : ndarray (H, W) of bool, optional
-        The reference's caustic region the table's raw relMSE is taken over. The
-        excess is not scored over it (a region thresholded on the reference being
-        scored biases the excess) but over the method's own regions (module
-        docstring); without ``runner`` and the variance, the one-iteration claim
-        falls back to the table's raw relMSEs, with no interval.
-    independent_region : ndarray (H, W) of bool, optional
-        A caustic region from a reference independent of ``reference`` (other seeds):
-        scored in union with the method's regions
-        (:func:`harness.metrics.excess.scored_region`), so texels where the method
-        is dark at both iteration counts but the caustic is not are scored too.
+        The scene's caustic region (:func:`harness.compare.regions.scene_caustic_region`),
+        the one the convergence table is scored over; the excess ratio is taken over
+        it too. Without it, ``runner`` or the variance, the one-iteration claim falls
+        back to the table's relMSEs, with no interval.
     seeds : int, optional
         K, the seeds behind ``reference.variance`` (default the runner's scene's
         ``settings.seeds``).
@@ -605,8 +595,7 @@ def paper_claims(convergence, *, runner=None, reference=None, caustic=None,
             five = five_iterations_verdict(p95, standard_error=interval.standard_error,
                                            ci95=interval.ci95)
         k = int(seeds if seeds is not None else runner.scene.settings.seeds)
-        ratio = _excess_ratio_of(runner, reference, relmse, seeds=k,
-                                 independent_region=independent_region)
+        ratio = _excess_ratio_of(runner, reference, relmse, seeds=k, region=caustic)
         if ratio is not None:
             last = max(relmse)
             one = one_iteration_verdict({1: ratio.one.excess, last: ratio.last.excess},
@@ -617,10 +606,10 @@ def paper_claims(convergence, *, runner=None, reference=None, caustic=None,
 
 
 def _excess_ratio_of(runner, reference, relmse: dict[int, float], *, seeds: int,
-                     independent_region=None) -> ExcessRatio | None:
-    """:func:`excess_ratio` of the maps after 1 and the most iterations, or None when
-    it cannot be measured (no variance, fewer than 2 seeds, no caustic region, NaN
-    table relMSEs)."""
+                     region=None) -> ExcessRatio | None:
+    """:func:`excess_ratio` of the maps after 1 and the most iterations over the scene's
+    ``region``, or None when it cannot be measured (no variance, fewer than 2 seeds,
+    no caustic region, NaN table relMSEs)."""
     variance = getattr(reference, "variance", None)
     if (1 not in relmse or len(relmse) < 2 or variance is None or seeds < 2
             or any(math.isnan(relmse[k]) for k in (1, max(relmse)))):
@@ -628,10 +617,7 @@ def _excess_ratio_of(runner, reference, relmse: dict[int, float], *, seeds: int,
     frames = [runner.render(estimator="modified", safeguarded=False, iterations=k)
               for k in (1, max(relmse))]
     maps = [f.result.receivers[0].irradiance for f in frames]
-    region = caustic_region(maps[0]) | caustic_region(maps[1])
-    if independent_region is not None:
-        region = scored_region(region, independent_region)
-    if not region.any():
+    if region is None or not np.asarray(region, bool).any():
         return None
     # A dispersion scene's reference traces one photon pass per channel.
     rho = 0.0 if "dispersion" in frames[0].result.effects else 1.0

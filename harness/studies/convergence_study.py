@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from harness.compare.evaluate import score_value
+from harness.metrics import MetricInputError
+from harness.metrics.excess import excess_relative_mse
 from harness.raycast import ReceiverTracer
 from harness.studies import convergence
 from harness.studies.convergence import iteration_stats, lookups_per_vertex
@@ -26,7 +28,7 @@ CONFIGS = tuple((e, s) for e in ("modified", "newton", "secant") for s in (False
 COLUMNS = ("estimator", "safeguarded", "iteration", "mean_error_m", "p95_error_m",
            "max_error_m", "mean_error_texels", "p95_error_texels", "max_error_texels",
            "converged", "diverged", "oscillating", "stalled", "lost", "lookups_per_vertex",
-           "relmse", "time_ms")
+           "relmse", "excess_relmse", "excess_low", "excess_high", "time_ms")
 
 
 def texel_footprint(runner: RealtimeRunner, hits: dict, points: np.ndarray) -> np.ndarray:
@@ -37,9 +39,24 @@ def texel_footprint(runner: RealtimeRunner, hits: dict, points: np.ndarray) -> n
                                        size=runner.scene.settings.caustic_map)
 
 
+def _excess(method, reference, caustic, *, variance, seeds, rho
+            ) -> tuple[float, float, float]:
+    """(excess relMSE, its 95 % interval's low and high end), NaN where it cannot be
+    estimated (no variance, fewer than two seeds, an empty region)."""
+    if variance is None or seeds is None or seeds < 2 or not np.asarray(caustic).any():
+        return (float("nan"),) * 3
+    try:
+        e = excess_relative_mse(method, reference, variance, seeds=seeds, mask=caustic,
+                                channel_correlation=rho)
+    except MetricInputError:
+        return (float("nan"),) * 3
+    return e.excess, *e.excess_ci95
+
+
 def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarray, *,
                       max_iterations: int = 8, configs=CONFIGS, exposure=None,
-                      progress=None) -> Table:
+                      variance: np.ndarray | None = None, seeds: int | None = None,
+                      channel_correlation: float = 1.0, progress=None) -> Table:
     """The convergence table (columns :data:`COLUMNS`).
 
     Parameters
@@ -47,7 +64,15 @@ def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np
     reference
         Reference caustic irradiance of receiver 0, (H, W, 3) W/m².
     caustic
-        Boolean (H, W) caustic region of receiver 0, where relMSE is scored.
+        Boolean (H, W): the scene's caustic region of receiver 0
+        (``harness.compare.regions.scene_caustic_region``), where relMSE is scored;
+        the same texels as the comparison's ``receiver0 / caustic`` records.
+    variance, seeds
+        The reference's variance of the mean per texel and channel ((W/m²)²) and its
+        K seeds: the excess relMSE (``harness.metrics.excess``) and its 95 % interval
+        (``excess_low``, ``excess_high``); NaN without them.
+    channel_correlation
+        1 when the same photons carry all three channels, 0 for one pass per channel.
     progress
         Optional callable advanced once per render.
     """
@@ -73,14 +98,17 @@ def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np
                               hits["origin"][traced])
             footprint = texel_footprint(runner, {"light": hits["light"][traced]}, points)
             stats = iteration_stats(history, lost, exact.distance, footprint, iteration=k)
-            relmse = score_value("relmse", frame.result.receivers[0].irradiance, reference,
-                                 mask=caustic, exposure=exposure)
+            method_map = frame.result.receivers[0].irradiance
+            relmse = score_value("relmse", method_map, reference, mask=caustic,
+                                 exposure=exposure)
+            excess = _excess(method_map, reference, caustic, variance=variance, seeds=seeds,
+                             rho=channel_correlation)
             rows.append((estimator, safeguarded, k, stats.mean_error_m, stats.p95_error_m,
                          stats.max_error_m, stats.mean_error_texels, stats.p95_error_texels,
                          stats.max_error_texels, stats.converged, stats.diverged,
                          stats.oscillating, stats.stalled, stats.lost,
                          lookups_per_vertex(estimator, k, safeguarded=safeguarded), relmse,
-                         seconds * 1e3))
+                         *excess, seconds * 1e3))
             if progress is not None:
                 progress()
     return Table(COLUMNS, tuple(rows))

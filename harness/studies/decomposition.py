@@ -303,7 +303,8 @@ def _water_absorption(scene: Scene, geometry) -> np.ndarray | None:
     return np.asarray(water[0].material.absorption, np.float64)
 
 
-def decomposition_study(runner: RealtimeRunner, reference, *, noise_floor: float | None = None,
+def decomposition_study(runner: RealtimeRunner, reference, *, caustic: np.ndarray | None = None,
+                        noise_floor: float | None = None,
                         noise_floor_kind: str = "measured",
                         options: DecompositionOptions = DecompositionOptions(),
                         progress: Callable[[], None] | None = None) -> DecompositionRecord:
@@ -315,6 +316,10 @@ def decomposition_study(runner: RealtimeRunner, reference, *, noise_floor: float
         The method's scene (a preset configured), context and meshes.
     reference : ReceiverMap
         The reference's receiver 0 (irradiance W/m², (H, W, 3), and its variance).
+    caustic : ndarray (H, W) of bool, optional
+        The scene's caustic region (``harness.compare.regions.scene_caustic_region``),
+        scored by every step; default: the reference's own (a figure with no
+        independent reference).
     noise_floor : float, optional
         The reference's caustic-region relMSE noise floor; default: expected from
         the reference's variance (:func:`expected_noise_floor`).
@@ -328,7 +333,7 @@ def decomposition_study(runner: RealtimeRunner, reference, *, noise_floor: float
     tick = progress or (lambda: None)
     scene, settings, geometry = runner.scene, runner.settings, runner.geometry
     ref = np.asarray(reference.irradiance, np.float64)
-    mask = caustic_region(ref)
+    mask = caustic_region(ref) if caustic is None else np.asarray(caustic, bool)
     if noise_floor is None:
         noise_floor, noise_floor_kind = expected_noise_floor(reference, mask=mask), "expected"
     exposure = exposure_for(ref)

@@ -39,7 +39,7 @@ __all__ = ["ROW_FORMAT", "ReferenceJob", "RowJob", "SweepPlan", "method_identity
            "plan_sweep", "row_key"]
 
 #: Bump when what a row computes, or the entry's layout, changes meaning.
-ROW_FORMAT = 1
+ROW_FORMAT = 2
 
 
 @dataclass(frozen=True)

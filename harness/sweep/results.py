@@ -3,11 +3,15 @@
 Columns, in order: ``scene``, ``method``, one column per setting the grid varies
 (in the sweep file's order), then
 
-* ``relmse``, ``ssim``, ``flip``: receiver 0, caustic region (texels whose
-  reference luminance exceeds a fraction of its 99.5th percentile,
-  :func:`harness.compare.regions.caustic_region`); ``flux_ratio``: receiver 0,
-  whole map (the formulas are in ``reports.records.METRIC_FORMULAS``), as in
-  ``caustics compare``'s summary;
+* for each of ``relmse``, ``ssim``, ``flip`` (receiver 0, the scene's caustic
+  region: thresholded on the independent reference, the same texels for every row
+  of the scene, :func:`harness.compare.regions.scene_caustic_region`) and
+  ``flux_ratio`` (receiver 0, whole map): first ``excess_<metric>``, the method's
+  own error against the noise-free image (SSIM: the deficit below a perfect
+  method's; FLIP: above it; flux: ratio − 1), then its 95 % interval
+  ``excess_<metric>_low`` and ``_high``, then the raw value ``<metric>`` (the
+  formulas are in ``reports.records.METRIC_FORMULAS``), as in ``caustics
+  compare``'s summary and records;
 * ``time_warm_ms``: the method's warm frame time (median after a warm-up; for the
   caustics-mapping presets the sum of the passes, ``ctx.finish()`` and
   ``time.perf_counter`` on llvmpipe);
@@ -15,11 +19,12 @@ Columns, in order: ``scene``, ``method``, one column per setting the grid varies
   computed it when the row is cached);
 * ``cached``: ``true`` when the row was read from the results cache;
 * ``error``, ``stage``: why and where a failed row failed (empty otherwise);
-* ``pareto``: on its scene's Pareto front of (``time_warm_ms``, ``relmse``): no
-  other row of the scene is no slower and no less accurate, and better in one;
-* ``relmse_noise_floor``: the same relMSE of the independent reference (other
-  seeds) against the reference; ``reference_noise``: the reference's relative
-  noise in the caustic region;
+* ``pareto``: on its scene's Pareto front of (``time_warm_ms``, ``excess_relmse``):
+  no other row of the scene is no slower and no less accurate, and better in one;
+* ``relmse_noise_floor``: a diagnostic, the raw relMSE of the independent reference
+  (other seeds) against the reference (it holds both references' noise, no
+  yardstick); ``reference_noise``: the reference's relative noise in the caustic
+  region;
 * ``page``: the row's page folder; ``key``: its results-cache key.
 
 A number that is not finite, or was not computed, is an empty cell.
@@ -40,8 +45,10 @@ from scenes.files import atomic_write_bytes
 
 __all__ = ["VALUE_COLUMNS", "pareto_keys", "results_columns", "write_results_csv"]
 
-#: The metric columns, in order.
-VALUE_COLUMNS = ("relmse", "ssim", "flip", "flux_ratio")
+#: The metric columns, in order: per metric the excess, its interval, the raw value.
+VALUE_COLUMNS = tuple(column for metric in ("relmse", "ssim", "flip", "flux_ratio")
+                      for column in (f"excess_{metric}", f"excess_{metric}_low",
+                                     f"excess_{metric}_high", metric))
 
 
 def results_columns(grid: tuple[str, ...]) -> tuple[str, ...]:
@@ -51,14 +58,14 @@ def results_columns(grid: tuple[str, ...]) -> tuple[str, ...]:
 
 
 def pareto_keys(rows: list[RowResult]) -> set[str]:
-    """Row keys on their scene's Pareto front of (time_warm_ms, relmse); failed rows
+    """Row keys on their scene's Pareto front of (time_warm_ms, excess_relmse); failed rows
     and rows without both numbers finite are never on it."""
     keys = set()
     scenes = dict.fromkeys(r.job.scene.name for r in rows)
     for scene in scenes:
         mine = [r for r in rows if r.job.scene.name == scene and not r.failed]
         times = np.array([_number(r.time_warm_ms) for r in mine], float)
-        errors = np.array([_number(r.values.get("relmse")) for r in mine], float)
+        errors = np.array([_number(r.values.get("excess_relmse")) for r in mine], float)
         keys.update(mine[i].job.key for i in pareto_front(times, errors))
     return keys
 

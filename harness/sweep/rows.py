@@ -89,14 +89,24 @@ def score_row(scene: Scene, method_name: str, render: RowRender, reference: Rend
 
 def row_values(comparison: SceneComparison) -> dict[str, float]:
     """The results.csv values of a comparison (:data:`KEY_VALUES`; NaN where a
-    metric was not computed, e.g. an empty caustic region), and the relMSE's noise
-    floor."""
+    metric was not computed, e.g. an empty caustic region): for each, the excess
+    (``excess_<column>``) and its 95 % interval (``excess_<column>_low``, ``_high``)
+    first, the raw value (``<column>``) after, and the relMSE's noise floor (a
+    diagnostic)."""
     values = {}
+    nan = float("nan")
     for column, view, region, metric in KEY_VALUES:
         try:
-            values[column] = float(comparison.metric(view, region, metric).value)
+            record = comparison.metric(view, region, metric)
         except KeyError:
-            values[column] = float("nan")
+            record = None
+        low, high = (record.excess_ci95 if record is not None and record.excess_ci95
+                     else (nan, nan))
+        excess = record.excess if record is not None and record.excess is not None else nan
+        values[f"excess_{column}"] = float(excess)
+        values[f"excess_{column}_low"] = float(low)
+        values[f"excess_{column}_high"] = float(high)
+        values[column] = float(record.value) if record is not None else nan
     try:
         floor = comparison.metric("receiver0", "caustic", "relmse").noise_floor
     except KeyError:

@@ -108,13 +108,20 @@ def test_hostile_text_is_escaped_and_folder_is_sanitised(linked, embedded):
             assert "&lt;script&gt;window.__pwned = 1&lt;/script&gt;" in html
 
 
-def test_metric_table_shows_value_noise_floor_and_formula(linked, comparison):
+def test_metric_table_shows_excess_first_then_raw_and_formula(linked, comparison):
+    """Regression lock on the page's Metrics table: the excess (the method's own error)
+    comes before the raw value, and the seed-against-seed floor is last, labelled a
+    diagnostic, never beside the raw value as a yardstick."""
     html = (linked / "glass_sphere-paper" / "index.html").read_text("utf-8")
     m = comparison.metric("receiver0", "caustic", "ssim")
-    row = re.search(r"<tr><td>caustic</td><td>ssim</td>(.*?)</tr>",
-                    html[html.index("<caption>receiver0</caption>"):], re.S).group(1)
-    assert f"{m.value:.4g}" in row and f"{m.noise_floor:.4g}" in row
-    assert "Wang et al. 2004" in row
+    table = html[html.index("<caption>receiver0</caption>"):]
+    header = table[:table.index("</thead>")]
+    assert header.index("excess") < header.index("raw value") < header.index("diagnostic")
+    row = re.search(r"<td>caustic</td><td>ssim</td>(.*?)</tr>", table, re.S).group(1)
+    cells = re.findall(r"<td[^>]*>(.*?)</td>", row, re.S)
+    assert f"{m.value:.4g}" in row and "Wang et al. 2004" in row
+    assert cells[-1] == f"{m.noise_floor:.4g}"
+    assert cells.index(f"{m.value:.4g}") < len(cells) - 1
     shown = {m.metric for m in comparison.metrics}
     for metric in shown:
         assert METRIC_FORMULAS[metric] in unescape(html), metric

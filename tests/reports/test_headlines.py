@@ -113,7 +113,7 @@ def test_speedup_is_withheld_when_the_error_is_enormous(tmp_path, comparison):
     html, text = _page(tmp_path / "shown", shown)
     assert f"{comparison.speedup.speedup:.4g}×" in html
     assert "withheld" not in text.lower()
-    assert "withheld" not in summary_rows([shown])[0][7]
+    assert "withheld" not in summary_rows([shown])[0][6]
     assert comparison_json(shown)["equal_error_speedup"]["shown"] is True
     timing = {"policy": "warm and cold", "method": {"build_s": 0.1, "compile_s": 0.2},
               "reference": {"build_s": 0.3, "compile_s": 0.4}}
@@ -126,7 +126,7 @@ def test_speedup_is_withheld_when_the_error_is_enormous(tmp_path, comparison):
     data = comparison_json(bad)["equal_error_speedup"]
     assert data["shown"] is False and "3.6" in data["withheld_because"]
     assert data["warm"]["speedup"] == comparison.speedup.speedup
-    assert summary_rows([bad])[0][7] == "withheld: relMSE 3.6 >= 1"
+    assert summary_rows([bad])[0][6] == "withheld: relMSE 3.6 >= 1"
     assert any("Equal-error speedup withheld" in line for line in headline_lines([bad]))
 
 

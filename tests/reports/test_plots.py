@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from reports import plots
+from reports.build import speedup_text
 from reports.records import EqualErrorSpeedup, Table
 from tests.reports.conftest import convergence_table, cost_table
 
@@ -71,3 +72,53 @@ def test_empty_tables_do_not_crash():
     cost = Table(cost_table(np.random.default_rng(0))[0].columns, ())
     assert plots.figure_bytes(plots.convergence_figure(convergence)).startswith(b"<?xml")
     assert b"no caustic" in plots.figure_bytes(plots.cost_figure(cost))
+
+
+def _with_excess(table: Table) -> Table:
+    """``table`` with excess columns: the relMSE less a constant baseline of 1e-4, its
+    interval ±10 %."""
+    columns = (*table.columns, "excess", "excess_low", "excess_high")
+    rows = []
+    for record in table.records():
+        excess = record["relmse"] - 1e-4
+        rows.append({**record, "excess": excess, "excess_low": 0.9 * excess,
+                     "excess_high": 1.1 * excess})
+    return Table.from_records(columns, rows)
+
+
+def test_cost_plot_draws_the_excess_with_bars_and_the_cold_points():
+    """Regression lock: with excess columns the y axis is the excess relMSE, each point
+    has its interval bar, and the method's cold points are drawn (hollow) beside the
+    warm ones; a speedup below 1 reads "slower" in the title."""
+    table, time, error = cost_table(np.random.default_rng(2))
+    speedup = EqualErrorSpeedup(0.625, 0.01, "interpolated", low=0.5, high=0.8)
+    figure = plots.cost_figure(_with_excess(table), speedup=speedup, point=(time, error))
+    ax = figure.axes[0]
+    labels = ax.get_legend_handles_labels()[1]
+    assert "method, cold (first frame)" in labels and "method, warm" in labels
+    assert ax.get_ylabel().startswith("excess relMSE")
+    assert "1.6× slower" in ax.get_title()
+    bars = [c for c in ax.containers if hasattr(c, "has_yerr") and c.has_yerr]
+    assert len(bars) == 2      # the method's configurations and the reference's curve
+
+
+def test_scene_cost_plot_holds_every_method_and_the_reference():
+    """Regression lock: the index's per-scene plot draws each method's point at the
+    scene settings, warm and cold, and the reference's curve once."""
+    table, _, _ = cost_table(np.random.default_rng(3))
+    tables = {"paper": _with_excess(table), "strong": _with_excess(table)}
+    ax = plots.scene_cost_figure("glass_sphere", tables).axes[0]
+    labels = ax.get_legend_handles_labels()[1]
+    assert labels.count("reference (Mitsuba), warm") == 1
+    for method in tables:
+        assert f"{method}, warm" in labels and f"{method}, cold" in labels
+    empty = plots.scene_cost_figure("none", {"paper": _with(table, relmse=float("nan"))})
+    assert empty.axes[0].texts, "no panel text for a scene without finite points"
+
+
+def test_a_speedup_below_one_reads_slower():
+    """The report's and the record's texts agree: 0.625 is "1.6× slower"."""
+    speedup = EqualErrorSpeedup(0.625, 0.01, "interpolated", low=0.5, high=0.8)
+    assert speedup.text.startswith("1.6× slower (speedup 0.625×")
+    assert speedup_text(speedup).startswith("1.6× slower (speedup 0.625×")
+    assert EqualErrorSpeedup(2.5, 0.01, "interpolated").text == "2.5×"

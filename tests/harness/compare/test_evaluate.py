@@ -22,7 +22,16 @@ def test_scores_and_noise_floor():
     values, maps = score_view("receiver0", method, ref, independent, regions=regions,
                               exposure=exposure_for(ref))
     by_key = {(v.region, v.metric): v for v in values}
-    assert {r for r, _ in by_key} == {"full", "caustic"}  # empty regions are skipped
+    # Empty regions are skipped; the caustic region adds the stray flux outside it.
+    assert {r for r, _ in by_key} == {"full", "caustic", "outside"}
+    assert {m for r, m in by_key if r == "outside"} == {"stray_flux"}
+    outside = ~regions["caustic"]
+    stray = by_key["outside", "stray_flux"]
+    assert stray.pixels == int(outside.sum())
+    # Every channel of both maps is the same grey: luminance is the channel's value.
+    assert stray.value == pytest.approx(1.2 * ref[outside, 0].sum() / ref[..., 0].sum())
+    assert stray.excess == pytest.approx(0.2 * ref[outside, 0].sum() / ref[..., 0].sum())
+    assert by_key["caustic", "relmse"].pixels == int(regions["caustic"].sum())
     assert by_key["full", "flux_ratio"].value == pytest.approx(1.2)
     assert by_key["full", "flux_ratio"].noise_floor == pytest.approx(1.0, abs=0.01)
     for metric in ("relmse", "flip"):

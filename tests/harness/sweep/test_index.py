@@ -21,8 +21,9 @@ HOSTILE = '<script>window.__pwned = 1</script>"&'
 def _row(scene, key, time_ms, relmse, *, error="", iterations=1):
     job = RowJob(scene=scene, method="paper", setting=Setting((("iterations", iterations),)),
                  key=key, folder=f"{scene.name}-{key}", reference="r", independent="i")
-    values = {} if error else {"relmse": relmse, "ssim": 0.9, "flip": 0.1, "flux_ratio": 1.0,
-                               "relmse_noise_floor": 0.01}
+    # The front is read on the excess relMSE; the raw value is a baseline of 1e-3 above.
+    values = {} if error else {"excess_relmse": relmse, "relmse": relmse + 1e-3, "ssim": 0.9,
+                               "flip": 0.1, "flux_ratio": 1.0, "relmse_noise_floor": 0.01}
     return RowResult(job=job, values=values, time_warm_ms=None if error else time_ms,
                      worker="" if error else "tcp://127.0.0.1:1", error=error,
                      stage="render" if error else "", page=None if error else job.folder)
@@ -30,7 +31,7 @@ def _row(scene, key, time_ms, relmse, *, error="", iterations=1):
 
 def test_pareto_front_per_scene_known_answers(tmp_path):
     """Regression lock (known answers, worked by hand): on scene a the points
-    (time ms, relMSE) (1, 0.5), (2, 0.3), (3, 0.4), (4, 0.1), (5, NaN) and a failed
+    (time ms, excess relMSE) (1, 0.5), (2, 0.3), (3, 0.4), (4, 0.1), (5, NaN) and a failed
     row: the front is (1, 0.5), (2, 0.3), (4, 0.1) ((3, 0.4) is dominated by (2,
     0.3)); scene b's one point (9, 0.9) is its own front although scene a has better
     ones: fronts are per scene. results.csv has its documented columns in order and
@@ -46,13 +47,15 @@ def test_pareto_front_per_scene_known_answers(tmp_path):
     path = tmp_path / "results.csv"
     write_results_csv(path, rows, grid=("iterations",))
     header = path.read_text().splitlines()[0].split(",")
-    assert header[:11] == ["scene", "method", "iterations", "relmse", "ssim", "flip",
-                           "flux_ratio", "time_warm_ms", "worker", "cached", "error"]
+    assert header[:7] == ["scene", "method", "iterations", "excess_relmse",
+                          "excess_relmse_low", "excess_relmse_high", "relmse"]
+    assert header[19:23] == ["time_warm_ms", "worker", "cached", "error"]
     assert tuple(header) == results_columns(("iterations",))
     table = read_rows(path)
     assert [r["pareto"] for r in table] == ["true", "true", "false", "true", "false", "false",
                                             "true"]
-    assert table[4]["relmse"] == "" and table[5]["error"] == "RuntimeError: x"
+    assert table[4]["excess_relmse"] == "" and table[5]["error"] == "RuntimeError: x"
+    assert float(table[0]["relmse"]) == 0.5 + 1e-3
     assert table[5]["page"] == "" and table[0]["page"] == "glass_sphere-a1"
 
 
@@ -64,15 +67,18 @@ def test_index_page_draws_each_scene_and_renders_names_inert(tmp_path):
     why it is empty)."""
     rows = (
         SweepRow(scene=HOSTILE, method="paper", setting=(("iterations", "1"),),
-                 values={"relmse": 0.5, "relmse_noise_floor": 0.01}, time_warm_ms=2.0,
+                 values={"excess_relmse": 0.5, "excess_relmse_low": 0.4,
+                         "excess_relmse_high": 0.6, "relmse": 0.51}, time_warm_ms=2.0,
                  worker="tcp://w0", pareto=True, folder="x-paper-iterations1"),
         SweepRow(scene=HOSTILE, method=HOSTILE, setting=(("iterations", "3"),),
-                 values={"relmse": 0.6}, time_warm_ms=3.0, worker="tcp://w1", cached=True,
+                 values={"excess_relmse": 0.6, "relmse": 0.61}, time_warm_ms=3.0,
+                 worker="tcp://w1", cached=True,
                  folder="x-m-iterations3"),
         SweepRow(scene=HOSTILE, method="strong", setting=(("iterations", "5"),),
                  error=f"RuntimeError: {HOSTILE}", stage="render"),
         SweepRow(scene="empty", method="paper", setting=(("iterations", "1"),),
-                 values={"relmse": math.nan}, time_warm_ms=1.0, folder="empty-paper"),
+                 values={"excess_relmse": math.nan, "relmse": math.nan}, time_warm_ms=1.0,
+                 folder="empty-paper"),
     )
     index = SweepIndex(name=HOSTILE, description=HOSTILE, file="s.toml",
                        columns=("iterations",), rows=rows,
@@ -88,7 +94,7 @@ def test_index_page_draws_each_scene_and_renders_names_inert(tmp_path):
     assert len(plots) == 2
     svgs = [(tmp_path / "plots" / name).read_text() for name in plots]
     assert any("Pareto front" in s for s in svgs)
-    assert any("no row has a finite, positive time and relMSE" in s for s in svgs)
+    assert any("no row has a finite, positive time and excess relMSE" in s for s in svgs)
     assert all("<script" not in s for s in svgs)
     assert (tmp_path / "_static" / "report.css").is_file()
     srcs = re.findall(r'<img src="([^"]+)"', page)

@@ -1,0 +1,126 @@
+"""One number per question, on a real ``caustics compare`` output (both presets, a small
+glass sphere): every written copy of a quantity agrees with its ``metrics.json`` record,
+every method of the scene is scored over the same pixels, and a copy that drifts is
+named (:mod:`harness.compare.consistency`). Kind: regression lock (it guards the
+pipeline's plumbing, not accuracy)."""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import json
+import shutil
+
+import pytest
+
+from harness.cli import main
+from harness.commands.compare import excess_cell
+from harness.compare.consistency import disagreements, page_number
+from reports.records import MetricValue
+from tests.harness.commands.test_compare import SMALL, _small_scene
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    """A quick compare of both presets (convergence and cost studies, checks), its
+    output folder and the terminal summary it printed."""
+    tmp = tmp_path_factory.mktemp("consistency")
+    out = tmp / "out"
+    argv = ["compare", str(_small_scene(tmp)), "-o", str(out), "--quick", "--cache-dir",
+            str(tmp / "cache"), "-q", *SMALL]
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        status = main(argv)
+    return status, out, printed.getvalue()
+
+
+def _metrics(out, method):
+    return json.loads((out / f"glass_sphere-{method}" / "metrics.json").read_text())
+
+
+def _copy(run, tmp_path):
+    target = tmp_path / "copy"
+    shutil.copytree(run[1], target)
+    return target
+
+
+def test_every_copy_agrees_and_every_method_scores_the_same_pixels(run):
+    status, out, _ = run
+    assert status == 0
+    assert disagreements(out) == []
+    paper, strong = _metrics(out, "paper"), _metrics(out, "strong")
+    pixels = {}
+    for data in (paper, strong):
+        for m in data["metrics"]:
+            assert isinstance(m["pixels"], int) and m["pixels"] > 0, m
+            pixels.setdefault((m["view"], m["region"], m["metric"]), set()).add(m["pixels"])
+    assert all(len(counts) == 1 for counts in pixels.values()), pixels
+    # Non-vacuity: the regions are not the whole map, and the two presets' maps differ.
+    caustic = pixels[("receiver0", "caustic", "relmse")].pop()
+    full = pixels[("receiver0", "full", "relmse")].pop()
+    assert 0 < caustic < full
+    assert pixels[("receiver0", "outside", "stray_flux")] == {full - caustic}
+    values = {d["method"]["name"]: next(m["value"] for m in d["metrics"] if (
+        m["view"], m["region"], m["metric"]) == ("receiver0", "caustic", "relmse"))
+        for d in (paper, strong)}
+    assert values["paper"] != values["strong"]
+
+
+def test_the_terminal_summary_shows_the_excess_and_its_interval_first(run):
+    _, out, printed = run
+    for method in ("paper", "strong"):
+        record = next(m for m in _metrics(out, method)["metrics"] if (
+            m["view"], m["region"], m["metric"]) == ("receiver0", "caustic", "relmse"))
+        cell = excess_cell(MetricValue(**{**record, "excess_ci95": tuple(
+            record["excess_ci95"])}))
+        assert cell in printed, (cell, printed)
+        low, high = record["excess_ci95"]
+        assert cell.index(f"[{low:.3g}, {high:.3g}]") < cell.index("raw")
+
+
+def test_a_page_number_that_drifts_is_named(run, tmp_path):
+    out = _copy(run, tmp_path)
+    page = out / "glass_sphere-strong" / "index.html"
+    record = next(m for m in _metrics(out, "strong")["metrics"] if (
+        m["view"], m["region"], m["metric"]) == ("receiver0", "caustic", "ssim"))
+    text = page.read_text("utf-8")
+    shown = f">{page_number(record['value'])}<"
+    assert shown in text
+    page.write_text(text.replace(shown, ">0.123<", 1), "utf-8")
+    found = disagreements(out)
+    assert found and all("glass_sphere-strong" in line for line in found), found
+
+
+def test_different_pixels_for_two_methods_are_named(run, tmp_path):
+    out = _copy(run, tmp_path)
+    path = out / "glass_sphere-paper" / "metrics.json"
+    data = json.loads(path.read_text())
+    record = next(m for m in data["metrics"] if m["region"] == "caustic")
+    record["pixels"] += 1
+    path.write_text(json.dumps(data))
+    assert any("different pixels" in line for line in disagreements(out))
+
+
+@pytest.mark.parametrize(("table", "column"), [("cost_accuracy.csv", "excess"),
+                                               ("convergence.csv", "excess_relmse")])
+def test_a_study_table_that_quotes_another_number_is_named(run, tmp_path, table, column):
+    out = _copy(run, tmp_path)
+    path = out / "glass_sphere-paper" / table
+    rows = list(csv.DictReader(path.open()))
+    settings = _metrics(out, "paper")["settings"]
+    for row in rows:
+        mine = (row.get("series") == "caustics_mapping" if table.startswith("cost") else
+                (row["estimator"], row["safeguarded"], int(row["iteration"])) == (
+                    settings["estimator"], str(settings["safeguarded"]),
+                    settings["iterations"]))
+        if mine:
+            row[column] = repr(float(row[column]) * 1.01)
+            break
+    else:
+        pytest.fail(f"no row of the scene's settings in {table}")
+    with path.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    assert any(table.split("_")[0].split(".")[0] in line for line in disagreements(out))
