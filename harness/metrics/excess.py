@@ -77,7 +77,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import stdtrit
+from scipy.special import gammaln, stdtrit
 
 from harness.metrics.scores import RELMSE_EPSILON, MetricInputError, relative_mse
 
@@ -192,6 +192,140 @@ def _h_derivatives(method, x, eps):
     return h, h1, h2, h4
 
 
+def _h3(method, x, eps):
+    """h'''(x) = w''' d² − 6 w'' d + 6 w', d = M − x (Leibniz, as above)."""
+    d = method - x
+    return _d3w(x, eps) * d * d - 6.0 * _d2w(x, eps) * d + 6.0 * _dw(x, eps)
+
+
+def _c4(seeds: float) -> float:
+    """E[√v̂] / √v for a Gaussian variance with K − 1 degrees of freedom:
+    √(2 / (K − 1)) Γ(K / 2) / Γ((K − 1) / 2) (0.921 at K = 4, 0.983 at K = 16)."""
+    k = float(seeds)
+    return float(np.sqrt(2.0 / (k - 1.0)) * np.exp(gammaln(k / 2.0) - gammaln((k - 1.0) / 2.0)))
+
+
+@dataclass(frozen=True, eq=False)
+class NoiseStructure:
+    """What the per-seed maps say about the reference's noise beyond its variance.
+
+    Attributes
+    ----------
+    third_moment : ndarray (H, W, C) or None
+        Unbiased estimate of the third central moment (cumulant) of the reference's
+        *mean* per texel and channel, k̂₃ / K² with Fisher's
+        k₃ = K Σ_k (x_k − x̄)³ / ((K − 1)(K − 2)) over the K seed estimates x_k (cubed
+        image units); None below K = 3 seeds.
+    correlation : dict of (int, int) to float
+        Pooled correlation of the noise at texel offset (dy, dx) (one of each
+        ± pair, dy ≥ 0): Σ ĉ_ij / √(Σ v̂_i Σ v̂_j) over the pairs (i, j = i + offset)
+        of the region and over channels, ĉ_ij = Σ_k (x_ik − x̄_i)(x_jk − x̄_j) /
+        (K (K − 1)) the unbiased covariance of the two texels' means.
+    seeds : int
+        K.
+    """
+
+    third_moment: np.ndarray | None
+    correlation: dict
+    seeds: int
+
+
+#: Radius (texels) of the square window of neighbour offsets whose noise covariance
+#: enters the standard error. A photon lands in one texel, so the only source of
+#: covariance between texels is the stratified emission of one launch: neighbouring
+#: strata land in neighbouring texels, and a stratum that lands in one cannot land in
+#: the next (negative correlation, about −0.25 at lag 1 in the calibration's
+#: simulation and decaying within two texels there). Offsets past the radius are
+#: taken as uncorrelated.
+NEIGHBOUR_RADIUS = 2
+
+
+def _offsets(radius: int):
+    """Offsets (dy, dx) of the half window: dy > 0, or dy = 0 and dx > 0."""
+    return [(dy, dx) for dy in range(radius + 1) for dx in range(-radius, radius + 1)
+            if dy > 0 or dx > 0]
+
+
+def _pairs(array: np.ndarray, dy: int, dx: int):
+    """The views (a_i, a_j) of ``array`` (H, W, ...) with j = i + (dy, dx), dy ≥ 0."""
+    h, w = array.shape[:2]
+    if dy >= h or abs(dx) >= w:
+        return None
+    xa = slice(0, w - dx) if dx >= 0 else slice(-dx, w)
+    xb = slice(dx, w) if dx >= 0 else slice(0, w + dx)
+    return array[0:h - dy, xa], array[dy:h, xb]
+
+
+def noise_structure(seed_estimates, *, mask=None,
+                    radius: int = NEIGHBOUR_RADIUS) -> NoiseStructure:
+    """The reference's noise structure from its K per-seed maps (:class:`NoiseStructure`).
+
+    Parameters
+    ----------
+    seed_estimates : ndarray (K, H, W, C)
+        Each seed's estimate of the image (the reference is their mean; its variance
+        of the mean is their unbiased variance / K).
+    mask : ndarray (H, W) of bool, optional
+        The region the correlations are pooled over (both texels of a pair inside it;
+        default every texel). The same region the excess is scored over.
+    radius : int
+        Offsets up to ``radius`` texels in each direction.
+    """
+    x = np.asarray(seed_estimates, np.float64)
+    if x.ndim != 4 or x.shape[0] < 2:
+        raise MetricInputError(f"seed estimates must be (K >= 2, H, W, C), got {x.shape}")
+    if not np.isfinite(x).all():
+        raise MetricInputError("seed estimates must be finite")
+    k = x.shape[0]
+    sel = np.ones(x.shape[1:3], bool) if mask is None else np.asarray(mask, bool)
+    if sel.shape != x.shape[1:3]:
+        raise MetricInputError(f"mask {sel.shape} does not match {x.shape[1:3]}")
+    dev = x - x.mean(axis=0)
+    third = None
+    if k >= 3:
+        third = k * (dev**3).sum(axis=0) / ((k - 1.0) * (k - 2.0)) / (k * k)
+    var = (dev * dev).sum(axis=0) / (k * (k - 1.0))  # v̂ of the mean, (H, W, C)
+    correlation = {}
+    for dy, dx in _offsets(int(radius)):
+        pair = _pairs(np.moveaxis(dev, 0, -1), dy, dx)  # (.., C, K)
+        if pair is None:
+            continue
+        inside = _pairs(sel, dy, dx)
+        both = inside[0] & inside[1]
+        if not both.any():
+            continue
+        va, vb = _pairs(var, dy, dx)
+        cov = (pair[0][both] * pair[1][both]).sum() / (k * (k - 1.0))
+        scale = np.sqrt(float(va[both].sum()) * float(vb[both].sum()))
+        correlation[(dy, dx)] = float(cov / scale) if scale > 0 else 0.0
+    return NoiseStructure(third_moment=third, correlation=correlation, seeds=k)
+
+
+def _neighbour_variance(g, hh, v, sel, noise: NoiseStructure, rho, k: float):
+    """Σ over texel pairs i ≠ j of the region of the terms' covariances (both orders):
+    linear ρ_o Σ_cc' P_cc' (g_ic σ_ic)(g_jc' σ_jc') with the plug-in's excess
+    E[g(R_i) g(R_j)] − g_i g_j = h''_i h''_j c_ij removed, and quadratic
+    2 β_i β_j c_ij² K / (K − 1) per channel pair (β = ½ h'', Cov of η² − v̂ for
+    Gaussian noise), c_ij = ρ_o P_cc' σ_ic σ_jc' with ρ_o the pooled correlation of the
+    offset and P the channels' correlation. E[σ̂_i σ̂_j] = c₄² σ_i σ_j (independent
+    variance estimates) is divided out."""
+    s = np.sqrt(v)
+    c4sq = _c4(k) ** 2
+    linear = quadratic = 0.0
+    for (dy, dx), r in noise.correlation.items():
+        if r == 0.0:
+            continue
+        inside = _pairs(sel, dy, dx)
+        both = inside[0] & inside[1]
+        gs_a, gs_b = (a[both] for a in _pairs(g * s, dy, dx))  # (n, C)
+        hv_a, hv_b = (a[both] for a in _pairs(hh * v, dy, dx))
+        cross = np.einsum("nc,cd,nd->", gs_a, rho, gs_b) / c4sq
+        plug = np.einsum("nc,cd,nd->", hv_a, rho * rho, hv_b)
+        linear += 2.0 * (r * cross - r * r * plug)
+        quadratic += 2.0 * 0.5 * r * r * plug * k / (k - 1.0)
+    return float(linear), float(quadratic)
+
+
 def _channel_rho(channels: int, rho: float) -> np.ndarray:
     """(C, C) correlation of the channels' noise: 1 on the diagonal, ρ elsewhere."""
     r = np.full((channels, channels), float(rho))
@@ -203,7 +337,8 @@ def relmse_variance_terms(method, reference, variance, *, seeds: int,
                           independent=None, independent_variance=None,
                           independent_seeds: int | None = None,
                           channel_correlation: float = 1.0,
-                          epsilon: float = RELMSE_EPSILON):
+                          epsilon: float = RELMSE_EPSILON,
+                          noise: NoiseStructure | None = None):
     """Per-texel excess terms and their model variances (the parts of
     :func:`excess_relative_mse`, exposed for maps and for pooling regions).
 
@@ -248,10 +383,23 @@ def relmse_variance_terms(method, reference, variance, *, seeds: int,
         # E[½ h''(R) v̂] − h(T) = (1/24 − 1/4) h · 3v²/3 = −⅛ h v² (Gaussian
         # μ₄ = 3v²), is added back with E[v̂²] = v² (K + 1)/(K − 1).
         terms = h - 0.5 * hh * v + 0.125 * h4 * v * v * (k - 1.0) / (k + 1.0)
+        h3 = _h3(m, r, epsilon)
         gg = g[..., :, None] * g[..., None, :]
         hhhh = hh[..., :, None] * hh[..., None, :]
         linear = gg * ss - rho * hhhh * vv / f
         quadratic = 0.5 * hhhh * vv * k / ((k - 1.0) * f)
+        if noise is not None and noise.third_moment is not None:
+            # Skewed noise: E[h(R)] carries ⅙ h''' μ₃ and E[h''(R) v̂] carries h''' μ₃
+            # (Cov(R, v̂) = μ₃ of the mean), so the term above is biased by −⅓ h''' μ₃;
+            # k̂₃ is unbiased for μ₃. Its own variance, 6 v³ / ((K − 1)(K − 2)) for
+            # Gaussian seeds, scaled by (⅓ h''')², joins the quadratic part (channels
+            # correlated as ρ², like the other squared terms).
+            k3 = np.asarray(noise.third_moment, np.float64)
+            if k3.shape != r.shape:
+                raise MetricInputError(f"third moment {k3.shape} differs from {r.shape}")
+            terms = terms + h3 * k3 / 3.0
+            t3 = h3 / 3.0 * np.sqrt(6.0 * v**3 / ((k - 1.0) * (k - 2.0)))
+            quadratic = quadratic + t3[..., :, None] * t3[..., None, :]
         dof = seeds - 1
     else:
         if independent_variance is None:
@@ -298,7 +446,9 @@ def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
                         independent=None, independent_variance=None,
                         independent_seeds: int | None = None,
                         channel_correlation: float = 1.0,
-                        epsilon: float = RELMSE_EPSILON) -> ExcessError:
+                        epsilon: float = RELMSE_EPSILON,
+                        seed_estimates=None,
+                        neighbour_radius: int = NEIGHBOUR_RADIUS) -> ExcessError:
     """The method's relMSE against the noise-free image, unbiased, with its standard
     error and 95 % interval (module docstring).
 
@@ -325,22 +475,47 @@ def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
         (dispersion).
     epsilon : float
         relMSE's regulariser (squared image units).
+    seed_estimates : ndarray (K, H, W, 3), optional
+        The reference's K per-seed images (their mean is ``reference``, their unbiased
+        variance / K is ``variance``). With them (one reference only) the term's
+        third-moment bias is removed and the standard error includes the covariance
+        of neighbouring texels' noise (:func:`noise_structure`, pooled over ``mask``);
+        without them the noise is taken as symmetric and texels as independent.
+    neighbour_radius : int
+        Offsets (texels) whose covariance is included (:data:`NEIGHBOUR_RADIUS`).
     """
     value = relative_mse(method, reference, mask=mask, epsilon=epsilon)
+    sel = (np.ones(np.shape(reference)[:2], bool) if mask is None
+           else np.asarray(mask, bool))
+    noise = None
+    if seed_estimates is not None and independent is None:
+        seed_estimates = np.asarray(seed_estimates)
+        if seed_estimates.shape[1:] != np.shape(reference) or seed_estimates.shape[0] != seeds:
+            raise MetricInputError(f"seed estimates {seed_estimates.shape} are not {seeds} "
+                                   f"images of {np.shape(reference)}")
+        noise = noise_structure(seed_estimates, mask=sel, radius=neighbour_radius)
     terms, (linear, quadratic), baseline, dof = relmse_variance_terms(
         method, reference, variance, seeds=seeds, independent=independent,
         independent_variance=independent_variance, independent_seeds=independent_seeds,
-        channel_correlation=channel_correlation, epsilon=epsilon)
-    sel = np.ones(terms.shape[:2], bool) if mask is None else np.asarray(mask, bool)
+        channel_correlation=channel_correlation, epsilon=epsilon, noise=noise)
     count = terms[sel].size  # texels x channels, as relMSE averages
     excess = float(terms[sel].sum()) / count
+    cross_linear = cross_quadratic = 0.0
+    if noise is not None and noise.correlation:
+        m = np.asarray(method, np.float64)
+        r = np.asarray(reference, np.float64)
+        _, g, hh, _ = _h_derivatives(m, r, epsilon)
+        cross_linear, cross_quadratic = _neighbour_variance(
+            g, hh, np.asarray(variance, np.float64), sel, noise,
+            _channel_rho(r.shape[2], channel_correlation), float(seeds))
     # The linear part's plug-in correction assumes the stated channel correlation; if
     # the channels are in fact less correlated it overshoots and the part's sum can go
     # negative. It is floored at 0 as a sum (not per texel, which would bias a correct
     # specification upwards), so a wrong ρ = 1 leaves the quadratic part's (then
     # overstated) variance rather than none.
     texel_var = linear[sel] + quadratic[sel]
-    total = max(float(linear[sel].sum()), 0.0) + float(quadratic[sel].sum())
+    total = (max(float(linear[sel].sum()) + cross_linear, 0.0)
+             + float(quadratic[sel].sum()) + cross_quadratic)
     stderr = float(np.sqrt(max(total, 0.0))) / count
     spread = float(np.sum(texel_var**2))
     df = total**2 / (spread / dof) if spread > 0 and total > 0 else float("inf")
