@@ -43,8 +43,9 @@ from scipy.ndimage import gaussian_filter
 
 from harness.metrics.scores import MetricInputError, flip_error, structural_similarity
 
-__all__ = ["PerceptualBaseline", "PerceptualExcess", "block_bootstrap", "denoised_reference",
-           "flip_map", "perceptual_baseline", "perceptual_excess", "ssim_map"]
+__all__ = ["WELL_SAMPLED", "PerceptualBaseline", "PerceptualExcess", "block_bootstrap",
+           "denoised_reference", "flip_map", "perceptual_baseline", "perceptual_excess",
+           "photons_per_texel", "ssim_map"]
 
 #: A metric map: (method, reference), both (H, W, 3) linear, to an (H, W) map.
 MetricMap = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -58,6 +59,12 @@ Z95 = 1.959963984540054
 BLOCK = 8
 #: Bootstrap resamples.
 RESAMPLES = 400
+#: Photons a texel's reference mean must hold (:func:`photons_per_texel`) for SSIM and
+#: FLIP to be scored there: 100, a relative noise of 10 %, the most the reference is
+#: held to. Below it a texel holds a handful of photons per seed (a caustic's fringe),
+#: where SSIM and FLIP of a perfect method swing with the photons' discreteness and the
+#: denoised reference T̃ is least reliable.
+WELL_SAMPLED = 100.0
 
 
 def ssim_map(*, white: float) -> MetricMap:
@@ -90,12 +97,15 @@ class PerceptualBaseline:
     trials : int
     baseline_map : ndarray (H, W)
         The metric map averaged over trials.
+    trial_maps : ndarray (trials, H, W) or None
+        Each trial's map (``keep_trials``), for the Monte Carlo error over any region.
     """
 
     baseline: float
     spread: float
     trials: int
     baseline_map: np.ndarray = field(repr=False)
+    trial_maps: np.ndarray | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -154,9 +164,43 @@ def _noise(rng, shape, variance, rho):
     return np.sqrt(variance) * (np.sqrt(rho) * common + np.sqrt(1.0 - rho) * own)
 
 
+def photons_per_texel(reference, variance, *, sigma: float = WINDOW_SIGMA) -> np.ndarray:
+    """n: the photons a texel's reference mean is made of, per channel, as a photon
+    tracer's noise implies them: a mean of photons of weight q has variance q · mean, so
+    q = (G * v̂) / (G * R) (the Gaussian window G pools neighbours: v̂ alone has K − 1
+    degrees of freedom) and n = T̃ / q with T̃ the denoised reference
+    (:func:`denoised_reference`); (H, W, C). Infinite where the reference has no
+    variance (no noise), 0 where it is black."""
+    reference, variance, _ = _check(reference, variance, None)
+    truth = denoised_reference(reference, variance, sigma=sigma)
+    spatial = (sigma, sigma, 0)
+    weight_num = gaussian_filter(variance, spatial)
+    weight_den = gaussian_filter(reference, spatial)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = np.where(weight_den > 0, weight_num / weight_den, 0.0)
+        return np.where(q > 0, truth / q, np.where(truth > 0, np.inf, 0.0))
+
+
+def _photon_noise(rng, truth, photons, rho):
+    """A photon-like noisy copy of T̃: per channel T̃_c (1 + (N / n − 1) √(n / n_c)) with
+    N ~ Poisson(n): variance T̃_c² / n_c, skew 1 / √n, the tracer's discreteness where
+    n is small. With correlated channels (ρ > 0: one photon carries all three) one
+    count per texel, n the mean of its channels' n_c (all equal for photons whose
+    colour ratio is fixed); with ρ = 0 one count per channel, n = n_c."""
+    finite = np.isfinite(photons) & (photons > 0)
+    n_c = np.where(finite, photons, 1.0)
+    if rho > 0:
+        n = np.broadcast_to(n_c.mean(axis=-1, keepdims=True), n_c.shape)
+        relative = (rng.poisson(n[..., :1]) / n[..., :1] - 1.0) * np.sqrt(n / n_c)
+    else:
+        relative = rng.poisson(n_c) / n_c - 1.0
+    return np.where(finite, np.maximum(truth * (1.0 + relative), 0.0), truth)
+
+
 def perceptual_baseline(reference, variance, *, metric: MetricMap, trials: int = 8,
-                        seed: int = 0, mask=None,
-                        channel_correlation: float = 1.0) -> PerceptualBaseline:
+                        seed: int = 0, mask=None, channel_correlation: float = 1.0,
+                        noise: str = "photon", keep_trials: bool = False
+                        ) -> PerceptualBaseline:
     """Expected metric of a perfect method against ``reference`` (module docstring).
 
     Parameters
@@ -173,24 +217,38 @@ def perceptual_baseline(reference, variance, *, metric: MetricMap, trials: int =
         Region over which the map is averaged.
     channel_correlation : float
         Correlation of a texel's channel noises (1: one photon carries all three).
+    noise : str
+        ``"photon"`` (default): Poisson photon counts at the texel's photons
+        (:func:`photons_per_texel`, :func:`_photon_noise`): skewed and discrete like
+        the tracer's noise, with the reference's variance.
+        ``"gaussian"``: T̃ + ε, ε ~ N(0, v̂), correlated across channels by ρ.
+    keep_trials : bool
+        Keep each trial's map (``trial_maps``).
     """
     reference, variance, mask = _check(reference, variance, mask)
+    if noise not in ("photon", "gaussian"):
+        raise MetricInputError(f"noise must be 'photon' or 'gaussian', got {noise!r}")
     if trials < 2:
         raise MetricInputError(f"a spread needs at least 2 trials, got {trials}")
     if not 0.0 <= channel_correlation <= 1.0:
         raise MetricInputError(f"channel_correlation must be in [0, 1], got "
                                f"{channel_correlation}")
     truth = denoised_reference(reference, variance)
+    photons = photons_per_texel(reference, variance) if noise == "photon" else None
     rng = np.random.default_rng(seed)
     maps = []
     for _ in range(trials):
-        noisy = np.maximum(truth + _noise(rng, truth.shape, variance, channel_correlation),
-                           0.0)
+        if photons is None:
+            noisy = np.maximum(truth + _noise(rng, truth.shape, variance,
+                                              channel_correlation), 0.0)
+        else:
+            noisy = _photon_noise(rng, truth, photons, channel_correlation)
         maps.append(np.asarray(metric(truth, noisy), np.float64))
     stack = np.stack(maps)
     means = stack[:, mask].mean(axis=1)
     return PerceptualBaseline(baseline=float(means.mean()), spread=float(means.std(ddof=1)),
-                              trials=trials, baseline_map=stack.mean(axis=0))
+                              trials=trials, baseline_map=stack.mean(axis=0),
+                              trial_maps=stack if keep_trials else None)
 
 
 def block_bootstrap(values: np.ndarray, mask: np.ndarray, *, block: int, resamples: int,
@@ -214,7 +272,8 @@ def block_bootstrap(values: np.ndarray, mask: np.ndarray, *, block: int, resampl
 def perceptual_excess(method, reference, variance, *, metric: MetricMap,
                       higher_is_better: bool, mask=None, trials: int = 8, block: int = BLOCK,
                       resamples: int = RESAMPLES, seed: int = 0,
-                      channel_correlation: float = 1.0) -> PerceptualExcess:
+                      channel_correlation: float = 1.0,
+                      noise: str = "photon") -> PerceptualExcess:
     """The method's excess over a perfect method's score, with a block-bootstrap
     interval (module docstring).
 
@@ -230,7 +289,7 @@ def perceptual_excess(method, reference, variance, *, metric: MetricMap,
         Side of the resampled square blocks (texels); larger than the metric's window.
     resamples : int
         Bootstrap resamples.
-    trials, seed, mask, channel_correlation
+    trials, seed, mask, channel_correlation, noise
         As for :func:`perceptual_baseline`.
     """
     reference, variance, mask = _check(reference, variance, mask)
@@ -241,7 +300,8 @@ def perceptual_excess(method, reference, variance, *, metric: MetricMap,
     if block < 1 or resamples < 2:
         raise MetricInputError(f"block {block} and resamples {resamples} must be positive")
     base = perceptual_baseline(reference, variance, metric=metric, trials=trials, seed=seed,
-                               mask=mask, channel_correlation=channel_correlation)
+                               mask=mask, channel_correlation=channel_correlation,
+                               noise=noise)
     value_map = np.asarray(metric(method, reference), np.float64)
     sign = 1.0 if higher_is_better else -1.0
     excess_map = sign * (base.baseline_map - value_map)

@@ -301,7 +301,7 @@ def noise_structure(seed_estimates, *, mask=None,
     return NoiseStructure(third_moment=third, correlation=correlation, seeds=k)
 
 
-def _neighbour_variance(g, hh, v, sel, noise: NoiseStructure, rho, k: float):
+def _neighbour_variance(g, hh, v, sel, *, noise: NoiseStructure, rho, k: float):
     """Σ over texel pairs i ≠ j of the region of the terms' covariances (both orders):
     linear ρ_o Σ_cc' P_cc' (g_ic σ_ic)(g_jc' σ_jc') with the plug-in's excess
     E[g(R_i) g(R_j)] − g_i g_j = h''_i h''_j c_ij removed, and quadratic
@@ -506,8 +506,8 @@ def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
         r = np.asarray(reference, np.float64)
         _, g, hh, _ = _h_derivatives(m, r, epsilon)
         cross_linear, cross_quadratic = _neighbour_variance(
-            g, hh, np.asarray(variance, np.float64), sel, noise,
-            _channel_rho(r.shape[2], channel_correlation), float(seeds))
+            g, hh, np.asarray(variance, np.float64), sel, noise=noise,
+            rho=_channel_rho(r.shape[2], channel_correlation), k=float(seeds))
     # The linear part's plug-in correction assumes the stated channel correlation; if
     # the channels are in fact less correlated it overshoots and the part's sum can go
     # negative. It is floored at 0 as a sum (not per texel, which would bias a correct

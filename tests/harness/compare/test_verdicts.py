@@ -52,7 +52,8 @@ class FromReference:
                                      "seed": s.seed + 100 * s.seeds})
         result = render_reference(high, cache=self.cache, progress=False)
         return dataclasses.replace(result, receivers=tuple(
-            dataclasses.replace(r, irradiance=r.irradiance * self.scale, variance=None)
+            dataclasses.replace(r, irradiance=r.irradiance * self.scale, variance=None,
+                                seed_maps=None)
             for r in result.receivers), camera=result.camera * self.scale)
 
 

@@ -45,7 +45,7 @@ def seed_images(rng, truth: np.ndarray, *, seeds: int, photons: float, model: st
                 shape: float = 2.0) -> np.ndarray:
     """(K, H, W, 3) per-seed estimates of ``truth`` (H, W) under ``model`` (module
     docstring); ``photons``: expected photons per seed per unit of the truth."""
-    out = np.empty((seeds,) + truth.shape)
+    out = np.empty((seeds, *truth.shape))
     for k in range(seeds):
         if model in ("poisson", "compound"):
             counts = rng.poisson(photons * truth)
