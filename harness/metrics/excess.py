@@ -20,10 +20,12 @@ w(x) = 1 / (x² + ε) are w' = −2x / (x² + ε)², w'' = (6x² − 2ε) / (x²
 =================  ==========================================  ========================
 inputs             term                                        bias left
 =================  ==========================================  ========================
-R, v̂ ("taylor")    h(R) − ½ h''(R) v̂,  h(x) = w(x) (M − x)²    O(w' μ₃ + w v²/T²)
+R, v̂ ("taylor")    h(R) − ½ h''(R) v̂ + ⅛ h''''(R) v̂² (K−1)/(K+1)  −⅓ h''' μ₃ + O(w v³/T⁴)
+                   h(x) = w(x) (M − x)²
++ per-seed maps    the same + ⅓ h'''(R) k̂₃ / K²                O(h'''' κ₄ + w v³/T⁴)
 R, v̂, R', v̂'       ½ [w̃(R') (D² − v̂) + w̃(R) (D'² − v̂')],      O(w v²/T²)
 ("split")          w̃(X) = w(X) − ½ w''(X) v̂_X
-baseline           w(R) v̂ + w''(R) v̂² (K − 1)/(K + 1)            O(w' μ₃ + w v³/T⁴)
+baseline           w(R) v̂ + w''(R) v̂² (K − 1)/(K + 1)            O(w'' κ₄ + w v³/T⁴)
 =================  ==========================================  ========================
 
 Why: (M − R)² has expectation (M − T)² + v, so v̂ removes the noise, but a weight taken
@@ -34,9 +36,17 @@ h(x) = w(x)(M − x)², E[h(R)] = h(T) + ½ h''(T) v + O(μ₃), and E[h''(R) v�
 O(v²) because v̂ is independent of R (exactly so for Gaussian noise). The split term
 takes each weight from the *other*, independent reference, so weight and residual are
 independent and only the weight's curvature, E[w(X)] = w_T + ½ w'' v_X, needs the w̃
-correction; averaging both halves halves the noise. μ₃ is the third central moment of
-the reference's mean: for a photon count of N per texel it is ~T³/N², so the taylor
-term's bias is ~2/N² against a noise-only baseline of ~1/N, i.e. relatively 2/N.
+correction; averaging both halves halves the noise.
+
+Skew: μ₃ is the third central moment of the reference's mean, ~T³/N² for N photons per
+texel. E[h(R)] carries ⅙ h''' μ₃, and v̂ is not independent of R for skewed noise:
+Cov(R, v̂) = μ₃ (the sample mean and variance of K seeds), so E[h''(R) v̂] carries
+h''' μ₃ and the taylor term is biased by (⅙ − ½) h''' μ₃ = −⅓ h''' μ₃: for a perfect
+method h''' = 6 w' ≈ −12/T³, a bias of 4/N² against a baseline of 1/N, relatively 4/N.
+With the K per-seed maps (``seed_estimates``), k̂₃ = K Σ_k (x_k − x̄)³ / ((K − 1)(K − 2))
+(Fisher) gives k̂₃ / K², unbiased for μ₃ (:func:`noise_structure`), and ⅓ h'''(R) k̂₃ / K²
+is added. The baseline needs no such term: E[w(R) v̂] = w v + w' μ₃ + …, and a perfect
+method's E[w(R) (T − R)²] carries the same w' μ₃.
 
 Standard error (model-based, not design-based): the spread of the per-texel terms over
 the region is the spread of the *bias pattern*, which is fixed, not noise; the
@@ -50,10 +60,22 @@ split), so
 At b = 0 this is the 2 v² (1 + 1/(K − 1)) of the brief's (M − R)² − v̂; at b ≠ 0 the
 4 b² v term dominates. The plug-in α(R)² overstates α² by h''² v (its own noise), a
 100 % error at b = 0, so it is subtracted, and products v̂ v̂ are divided by
-E[v̂ v̂] / (v v) = 1 + 2ρ² / (K − 1).
+E[v̂ v̂] / (v v) = 1 + 2ρ² / (K − 1). The plug-in h''(R)² is itself inflated by R's noise
+(h'' moves with −6η/T through d = M − R: by about 72 v/T² at b = 0), in the quadratic
+part and in the linear part's subtraction alike; a second-order correction of it
+over-corrects at 10 % relative noise, so it is left, and the SE is conservative there
+(about 10 % high, docs/statistics.md). With the per-seed maps, k̂₃'s variance
+(⅓ h''')² 6 v³ / ((K − 1)(K − 2)) (Gaussian seeds) joins the quadratic part.
 
 Texels and channels: the photon tracer deposits each photon in the one texel its
-(u, v) falls in (nearest texel, ``renderers.mitsuba.photons``), so texels are
+(u, v) falls in (nearest texel, ``renderers.mitsuba.photons``), but one launch's photons
+are stratified (``renderers.mitsuba.emission``): neighbouring strata land in
+neighbouring texels, so neighbouring texels' noise anticorrelates (about −0.25 at lag 1).
+With the per-seed maps the pooled correlation ρ_o of each offset o within
+:data:`NEIGHBOUR_RADIUS` (:func:`noise_structure`) gives the pairs' covariances,
+c_ij = ρ_o σ_i σ_j, and the variance adds, over the region's pairs (both orders),
+ρ_o (α_i σ_i)(α_j σ_j) − h''_i h''_j c_ij² (the linear plug-in's excess) +
+2 β_i β_j c_ij² K/(K − 1) (:func:`_neighbour_variance`); without them texels are taken as
 independent. A texel's channels are one unit: a white or absorbed light's photons carry
 all three channels, so their noise is perfectly correlated (ρ = 1, the default); a
 dispersion scene traces one pass per channel (ρ = 0). Per texel the channels' terms are
@@ -509,13 +531,18 @@ def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
             g, hh, np.asarray(variance, np.float64), sel, noise=noise,
             rho=_channel_rho(r.shape[2], channel_correlation), k=float(seeds))
     # The linear part's plug-in correction assumes the stated channel correlation; if
-    # the channels are in fact less correlated it overshoots and the part's sum can go
-    # negative. It is floored at 0 as a sum (not per texel, which would bias a correct
-    # specification upwards), so a wrong ρ = 1 leaves the quadratic part's (then
-    # overstated) variance rather than none.
+    # the channels are in fact less correlated it overshoots and the part's sum goes
+    # negative, about −100 % of the quadratic part for a wrong ρ = 1 at b = 0. Even a
+    # correct one is slightly negative near b = 0: its subtraction h''(R)² v̂² is
+    # inflated by R's noise like the quadratic part (by ~72 v/T²), about −10 % of the
+    # quadratic part at 10 % relative noise, which that part's own inflation offsets.
+    # So the sum (not each texel, which would bias a correct specification upwards) is
+    # floored at −½ of the quadratic part: a correct ρ keeps the offset, a wrong ρ = 1
+    # keeps half the quadratic part's (then overstated) variance rather than none.
     texel_var = linear[sel] + quadratic[sel]
-    total = (max(float(linear[sel].sum()) + cross_linear, 0.0)
-             + float(quadratic[sel].sum()) + cross_quadratic)
+    quadratic_total = float(quadratic[sel].sum()) + cross_quadratic
+    total = (max(float(linear[sel].sum()) + cross_linear, -0.5 * quadratic_total)
+             + quadratic_total)
     stderr = float(np.sqrt(max(total, 0.0))) / count
     spread = float(np.sum(texel_var**2))
     df = total**2 / (spread / dof) if spread > 0 and total > 0 else float("inf")

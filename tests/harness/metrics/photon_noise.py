@@ -76,7 +76,10 @@ def _stratified(rng, truth: np.ndarray, photons: float) -> np.ndarray:
     rows = np.concatenate([[0.0], np.cumsum(truth.sum(axis=1))]) / total
     row = np.clip(np.searchsorted(rows, u1, side="right") - 1, 0, h - 1)
     within = np.cumsum(truth, axis=1) / truth.sum(axis=1, keepdims=True)  # (H, W)
-    col = (u2[:, None] > within[row, :-1]).sum(axis=1)
+    # Row r's conditional CDF shifted to (r, r + 1]: one increasing array, so the column
+    # is the count of row r's CDF values at or below u2, by one binary search.
+    shifted = (np.arange(h)[:, None] + within).ravel()
+    col = np.minimum(np.searchsorted(shifted, row + u2, side="right") - row * w, w - 1)
     counts = np.bincount(row * w + col, minlength=h * w).reshape(h, w)
     return counts * (total / n)
 
