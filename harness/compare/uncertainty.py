@@ -109,19 +109,27 @@ def _interval(excess: float, stderr: float, dof: float = math.inf) -> dict:
 
 @lru_cache(maxsize=16)
 def _baseline_maps(metric: str, *, reference: bytes, variance: bytes, shape: tuple,
-                   exposure: tuple[float, float, float], rho: float
-                   ) -> tuple[np.ndarray, np.ndarray]:
+                   exposure: tuple[float, float, float], rho: float,
+                   seeds: bytes | None = None) -> tuple[np.ndarray, np.ndarray]:
     """A perfect method's metric maps against the reference, one per trial (T, H, W)
     (photon-like noise, :func:`~harness.metrics.baselines.perceptual_baseline`), and
     the texels well sampled enough to be scored (H, W), memoised by the reference's
-    bytes: every method of a scene shares them."""
+    bytes: every method of a scene shares them. With the per-seed images (``seeds``,
+    an even number K of them) the simulated noise is the seeds' own (``noise="seeds"``:
+    stratified launches' anticorrelated neighbours included, which SSIM's window and
+    FLIP's filters see less of than independent noise); otherwise photon-like."""
     ref = np.frombuffer(reference, np.float32).reshape(shape)
     var = np.frombuffer(variance, np.float32).reshape(shape)
     white, start, stop = exposure
     function = (ssim_map(white=white) if metric == "ssim"
                 else flip_map(start_exposure=start, stop_exposure=stop))
+    per_seed = None if seeds is None else np.frombuffer(seeds, np.float32).reshape(-1, *shape)
+    # The seeds' own noise where they are given and come in pairs; photon-like noise
+    # fitted per texel otherwise.
+    noise = "seeds" if per_seed is not None and per_seed.shape[0] % 2 == 0 else "photon"
     maps = perceptual_baseline(ref, var, metric=function, trials=BASELINE_TRIALS[metric],
-                               channel_correlation=rho, keep_trials=True).trial_maps
+                               channel_correlation=rho, keep_trials=True, noise=noise,
+                               seed_estimates=per_seed).trial_maps
     photons = photons_per_texel(ref, var).min(axis=-1)
     return maps.astype(np.float32), photons >= WELL_SAMPLED
 
@@ -137,7 +145,9 @@ def _perceptual(metric: str, value_map: np.ndarray, reference: np.ndarray, mask:
     trials, sampled = _baseline_maps(
         metric, reference=ref.tobytes(), variance=var.tobytes(), shape=ref.shape,
         exposure=(inputs.white, inputs.flip_start, inputs.flip_stop),
-        rho=inputs.channel_correlation)
+        rho=inputs.channel_correlation,
+        seeds=(None if inputs.seed_estimates is None
+               else np.ascontiguousarray(inputs.seed_estimates, np.float32).tobytes()))
     scored = np.asarray(mask, bool) & sampled
     if not scored.any():
         return {}

@@ -6,13 +6,21 @@ metric(T, T + η), not the metric's ideal value (SSIM 1, FLIP 0). Neither metric
 mean of per-texel squares, so no closed form removes the noise as for relMSE
 (:mod:`harness.metrics.excess`); the baseline is simulated instead:
 
-    baseline = mean over trials of  metric(T̃, T̃ + ε),   ε ~ N(0, v̂) per texel,
+    baseline = mean over trials of  metric(T̃, T̃ + ε),   ε = √v̂ Z per texel,
 
-with the reference's per-texel, per-channel variance of the mean v̂, the channels'
-noise correlated as the tracer makes it (``channel_correlation``: 1 when one photon
-carries all three channels, 0 for per-channel passes), and T̃ an estimate of the
-noise-free image. T̃ = R would be wrong: R's own noise then counts as image structure
-that the noisy copy matches, and SSIM's structure term (2σ_xy + C₂)/(σ_x² + σ_y² + C₂)
+with the reference's per-texel, per-channel variance of the mean v̂, Z photon-like by
+default: (N − n) / √n with N ~ Poisson(n) and n the photons the texel's mean holds
+(:func:`photons_per_texel`: n = T̃ / q, q = G * v̂ / G * R the photons' weight), so ε
+has the tracer's skew 1 / √n and its discreteness where photons are few (Z standard
+normal with ``noise="gaussian"``); the channels' noise correlated as the tracer makes
+it (``channel_correlation``: 1 when one photon carries all three channels, one Z per
+texel; 0 for per-channel passes), and T̃ an estimate of the noise-free image. With the
+reference's K per-seed images (K even) ε is instead the seeds' own noise,
+(1/K) Σ_k s_k x_k with K/2 random signs +1 and K/2 −1 (``noise="seeds"``): the truth
+cancels and ε has the mean's covariance, neighbouring texels' included (a stratified
+launch makes them anticorrelate, noise that SSIM's window and FLIP's filters see less
+of than independent noise). T̃ = R would be wrong: R's own noise then counts as image
+structure that the noisy copy matches, and SSIM's structure term (2σ_xy + C₂)/(σ_x² + σ_y² + C₂)
 reads too high. T̃ is R shrunk towards its local mean by Wiener's factor,
 
     μ = G * R,   s² = G * (R − μ)²,   T̃ = μ + max(0, 1 − (G * v̂) / s²) (R − μ),
@@ -181,26 +189,40 @@ def photons_per_texel(reference, variance, *, sigma: float = WINDOW_SIGMA) -> np
         return np.where(q > 0, truth / q, np.where(truth > 0, np.inf, 0.0))
 
 
-def _photon_noise(rng, truth, photons, rho):
-    """A photon-like noisy copy of T̃: per channel T̃_c (1 + (N / n − 1) √(n / n_c)) with
-    N ~ Poisson(n): variance T̃_c² / n_c, skew 1 / √n, the tracer's discreteness where
-    n is small. With correlated channels (ρ > 0: one photon carries all three) one
-    count per texel, n the mean of its channels' n_c (all equal for photons whose
-    colour ratio is fixed); with ρ = 0 one count per channel, n = n_c."""
+def _photon_noise(rng, variance, photons, rho):
+    """ε_c = √v̂_c Z with Z = (N − n) / √n, N ~ Poisson(n): the reference's own variance
+    per texel and channel (as the Gaussian model has it, so a texel without variance
+    gets no noise), with a photon count's skew 1 / √n and discreteness where n is small.
+    With correlated channels (ρ > 0: one photon carries all three) one count per texel,
+    n the mean of its channels' n_c (all equal for photons whose colour ratio is
+    fixed); with ρ = 0 one count per channel, n = n_c. Where n is infinite (no
+    variance) Z is irrelevant and taken as 0."""
     finite = np.isfinite(photons) & (photons > 0)
     n_c = np.where(finite, photons, 1.0)
     if rho > 0:
-        n = np.broadcast_to(n_c.mean(axis=-1, keepdims=True), n_c.shape)
-        relative = (rng.poisson(n[..., :1]) / n[..., :1] - 1.0) * np.sqrt(n / n_c)
+        n = n_c.mean(axis=-1, keepdims=True)
     else:
-        relative = rng.poisson(n_c) / n_c - 1.0
-    return np.where(finite, np.maximum(truth * (1.0 + relative), 0.0), truth)
+        n = n_c
+    z = (rng.poisson(n) - n) / np.sqrt(n)
+    return np.sqrt(variance) * np.where(finite, z, 0.0)
+
+
+def _seed_noise(rng, seed_estimates):
+    """ε = (1/K) Σ_k s_k x_k with K/2 signs +1 and K/2 signs −1 drawn at random over the
+    K per-seed images x_k (K even): the truth cancels (Σ s_k = 0), and for independent
+    seeds ε has the mean's covariance exactly, Var = K σ² / K² = σ² / K per texel and
+    the seeds' own covariance between texels and channels (a stratified launch's
+    anticorrelated neighbours, which a texel-by-texel model misses); its distribution is
+    symmetric (no skew)."""
+    k = seed_estimates.shape[0]
+    signs = np.where(rng.permutation(k) < k // 2, 1.0, -1.0)
+    return np.tensordot(signs, seed_estimates, axes=1) / k
 
 
 def perceptual_baseline(reference, variance, *, metric: MetricMap, trials: int = 8,
                         seed: int = 0, mask=None, channel_correlation: float = 1.0,
-                        noise: str = "photon", keep_trials: bool = False
-                        ) -> PerceptualBaseline:
+                        noise: str = "photon", keep_trials: bool = False,
+                        seed_estimates=None) -> PerceptualBaseline:
     """Expected metric of a perfect method against ``reference`` (module docstring).
 
     Parameters
@@ -218,16 +240,27 @@ def perceptual_baseline(reference, variance, *, metric: MetricMap, trials: int =
     channel_correlation : float
         Correlation of a texel's channel noises (1: one photon carries all three).
     noise : str
-        ``"photon"`` (default): Poisson photon counts at the texel's photons
-        (:func:`photons_per_texel`, :func:`_photon_noise`): skewed and discrete like
-        the tracer's noise, with the reference's variance.
+        ``"photon"`` (default): T̃ + √v̂ Z, Z a standardised Poisson count at the
+        texel's photons (:func:`photons_per_texel`, :func:`_photon_noise`): the
+        reference's variance, skewed and discrete like the tracer's noise.
         ``"gaussian"``: T̃ + ε, ε ~ N(0, v̂), correlated across channels by ρ.
+        ``"seeds"``: T̃ + ε with ε a balanced signed combination of the per-seed images
+        (:func:`_seed_noise`): the reference's own noise covariance, neighbours
+        included; needs ``seed_estimates`` with an even K.
     keep_trials : bool
         Keep each trial's map (``trial_maps``).
+    seed_estimates : ndarray (K, H, W, 3), optional
+        The reference's per-seed images (``noise="seeds"``).
     """
     reference, variance, mask = _check(reference, variance, mask)
-    if noise not in ("photon", "gaussian"):
-        raise MetricInputError(f"noise must be 'photon' or 'gaussian', got {noise!r}")
+    if noise not in ("photon", "gaussian", "seeds"):
+        raise MetricInputError(f"noise must be 'photon', 'gaussian' or 'seeds', got {noise!r}")
+    if noise == "seeds":
+        seed_estimates = np.asarray(seed_estimates, np.float64)
+        k = seed_estimates.shape[0] if seed_estimates.ndim == 4 else 0
+        if seed_estimates.shape[1:] != reference.shape or k < 2 or k % 2:
+            raise MetricInputError(f"noise='seeds' needs an even number of per-seed images "
+                                   f"of {reference.shape}, got {seed_estimates.shape}")
     if trials < 2:
         raise MetricInputError(f"a spread needs at least 2 trials, got {trials}")
     if not 0.0 <= channel_correlation <= 1.0:
@@ -238,11 +271,14 @@ def perceptual_baseline(reference, variance, *, metric: MetricMap, trials: int =
     rng = np.random.default_rng(seed)
     maps = []
     for _ in range(trials):
-        if photons is None:
+        if noise == "seeds":
+            noisy = np.maximum(truth + _seed_noise(rng, seed_estimates), 0.0)
+        elif photons is None:
             noisy = np.maximum(truth + _noise(rng, truth.shape, variance,
                                               channel_correlation), 0.0)
         else:
-            noisy = _photon_noise(rng, truth, photons, channel_correlation)
+            noisy = np.maximum(truth + _photon_noise(rng, variance, photons,
+                                                     channel_correlation), 0.0)
         maps.append(np.asarray(metric(truth, noisy), np.float64))
     stack = np.stack(maps)
     means = stack[:, mask].mean(axis=1)

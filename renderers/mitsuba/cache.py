@@ -2,7 +2,8 @@
 
 A result directory holds ``camera.exr``, ``receiver_irradiance.exr`` (receiver 0),
 ``receiver_irradiance_1.exr``, ... (further receivers), each with an ``RGB`` layer
-(mean) and a ``variance`` layer (variance of the mean over K seeds), and
+(mean) and a ``variance`` layer (variance of the mean over K seeds), the receivers'
+also with the K seeds' own maps (layers ``seed0`` … ``seed{K-1}``), and
 ``result.json``: the metadata, the SHA-256 and (H, W) of every EXR (``files``,
 ``shapes``), and ``document_sha256``, the SHA-256 of the rest of the JSON itself
 (canonical form: keys sorted, no whitespace), so the manifest covers the JSON as
