@@ -95,9 +95,8 @@ def test_seed_noise_keeps_the_seeds_covariance():
 
 
 def test_perceptual_excess_only_where_texels_are_well_sampled():
-    """SSIM over a caustic with about one photon per texel per seed (n ≈ 4 < 100 in the
-    mean): no interval; at 25 per seed and unit (n ≥ 100): an interval whose SE is at
-    least the baseline's own Monte Carlo error."""
+    """SSIM over a caustic with about one photon per texel per seed (n ≈ 1.2–4 < 25 in
+    the mean): no interval; at 25 per seed and unit (n ≥ 100): an interval."""
     rng = np.random.default_rng(3)
     plain = caustic_truth(32)
     truth = plain[..., None] * CHANNELS
