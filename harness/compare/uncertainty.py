@@ -11,23 +11,34 @@ metric          excess                                      estimator and interv
 ==============  ==========================================  =============================
 relmse          relMSE against the noise-free image         :func:`harness.metrics.excess.
                                                             excess_relative_mse` (Taylor-
-                                                            corrected, model-based SE,
-                                                            Satterthwaite t interval)
+                                                            corrected, third-moment term
+                                                            and neighbour covariance from
+                                                            the per-seed images, model-
+                                                            based SE, Satterthwaite t)
 ssim            baseline − value (a deficit > 0)            :func:`harness.metrics.
                                                             baselines.perceptual_baseline`
-                                                            (simulated noise at the
-                                                            reference's variance), 8 × 8
-                                                            block bootstrap
+                                                            (the seeds' own noise, or
+                                                            photon-like noise at the
+                                                            reference's variance), over
+                                                            well-sampled texels; 8 × 8
+                                                            block bootstrap and the
+                                                            baseline's Monte Carlo error
 flip            value − baseline                            as SSIM
 flux_ratio      ratio − 1                                   delta method: Var Σ lum(R)
-                                                            from the per-texel variance
+                                                            from the K seeds' region
+                                                            totals (t, K − 1 dof), or
+                                                            the per-texel variance
 relmse_trimmed  none (trimming is not linear in the noise)  –
 psnr            none (a transform of the raw MSE)           –
 ==============  ==========================================  =============================
 
 The texel is the unit: a texel's channels are one sample (their noises perfectly
 correlated when the same photons carry all three channels, independent when each
-channel is traced on its own, as for dispersion: ``channel_correlation``).
+channel is traced on its own, as for dispersion: ``channel_correlation``). Texels'
+noise is independent only up to what the per-seed images measure (a stratified launch
+anticorrelates neighbours); a view whose pixels share noise by construction (the
+camera image, read bilinearly from lookup maps) gets no interval without per-seed
+images (``ExcessInputs.independent_texels``).
 
 A perceptual baseline depends on the reference alone, so it is computed once per
 reference image and view and shared by every method compared with it.
