@@ -85,3 +85,22 @@ def test_denoised_reference_removes_noise_where_the_truth_is_flat():
     assert clean < 0.3 * noisy, (clean, noisy)
     with pytest.raises(MetricInputError, match="2 trials"):
         perceptual_baseline(reference, variance, metric=ssim_map(white=WHITE), trials=1)
+
+
+def test_noise_models_and_their_input_errors():
+    """The seeds' noise needs an even number of per-seed images of the reference's size;
+    an unknown noise model is refused; every model gives a finite baseline."""
+    rng = np.random.default_rng(4)
+    truth = _truth(16)
+    reference, variance = _reference(rng, truth, 4, 1.0)
+    metric = ssim_map(white=WHITE)
+    seeds = reference + rng.standard_normal((4, *reference.shape)) * np.sqrt(variance)
+    for noise, extra in (("photon", {}), ("gaussian", {}), ("seeds", {"seed_estimates": seeds})):
+        base = perceptual_baseline(reference, variance, metric=metric, trials=2, noise=noise,
+                                   **extra)
+        assert np.isfinite(base.baseline) and base.baseline < 1.0, noise
+    with pytest.raises(MetricInputError, match="even number"):
+        perceptual_baseline(reference, variance, metric=metric, noise="seeds",
+                            seed_estimates=seeds[:3])
+    with pytest.raises(MetricInputError, match="noise must be"):
+        perceptual_baseline(reference, variance, metric=metric, noise="uniform")

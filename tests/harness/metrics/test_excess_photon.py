@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 from harness.metrics.excess import excess_relative_mse, noise_structure
+from harness.metrics.scores import MetricInputError
 from tests.harness.metrics.photon_noise import (
     CHANNELS,
     caustic_truth,
@@ -121,6 +122,21 @@ def test_neighbour_correlation_known_answer():
     assert structure.correlation[(0, 1)] == pytest.approx(-4 / 7, abs=0.04)
     # Vertical pairs: independent draws, |ρ| within 4 / √(pairs × (K − 1)).
     assert abs(structure.correlation[(1, 0)]) < 4 / np.sqrt(56 * 63)
+
+
+def test_seed_estimates_input_errors():
+    """Per-seed images must be K images of the reference's shape, K >= 2, finite."""
+    maps = np.ones((4, 6, 6, 3))
+    reference, variance = reference_of(maps)
+    with pytest.raises(MetricInputError, match="are not 4 images"):
+        excess_relative_mse(reference, reference, variance, seeds=4,
+                            seed_estimates=maps[:, :5])
+    with pytest.raises(MetricInputError, match="K >= 2"):
+        noise_structure(maps[:1])
+    bad = maps.copy()
+    bad[0, 0, 0, 0] = np.nan
+    with pytest.raises(MetricInputError, match="finite"):
+        noise_structure(bad)
 
 
 def test_stratified_emission_anticorrelates_neighbours():
