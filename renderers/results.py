@@ -36,11 +36,16 @@ class ReceiverMap:
         (umin, umax, vmin, vmax) in the receiver's (u, v) units.
     variance : ndarray, (H, W, 3), float32, or None
         Per-texel variance of the mean (references rendered with K seeds).
+    seed_maps : ndarray, (K, H, W, 3), float32, or None
+        The K seeds' own estimates of E (references): ``irradiance`` is their mean and
+        ``variance`` their unbiased variance over K. They carry what the variance
+        does not: the noise's skew and the covariance of neighbouring texels.
     """
 
     irradiance: np.ndarray
     extent: tuple[float, float, float, float]
     variance: np.ndarray | None = None
+    seed_maps: np.ndarray | None = None
 
     def texel_area(self) -> float:
         """Area of one texel in (u, v) units squared (m² for planes and heightfields)."""

@@ -90,7 +90,8 @@ METRICS = ("relmse", "relmse_trimmed", "psnr", "ssim", "flip", "flux_ratio")
 
 def score_view(view: str, method, reference, independent, *, regions: dict[str, np.ndarray],
                exposure: Exposure, variance=None, seeds: int | None = None,
-               channel_correlation: float = 1.0,
+               channel_correlation: float = 1.0, seed_estimates=None,
+               independent_texels: bool = True,
                ) -> tuple[list[MetricValue], dict[str, np.ndarray]]:
     """All metrics of one view over each region, with noise floors, the method's
     excess error with its interval where the reference has a variance
@@ -112,6 +113,9 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
         it comes from (None: no excess errors).
     channel_correlation
         1 when the same photons carry all three channels, 0 for one pass per channel.
+    seed_estimates, independent_texels
+        The reference's per-seed images (K, H, W, 3) or None, and whether the view's
+        texels carry independent noise (:class:`~harness.compare.uncertainty.ExcessInputs`).
 
     Returns
     -------
@@ -125,7 +129,9 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
     inputs = None
     if variance is not None and seeds is not None and seeds >= 2:
         inputs = ExcessInputs(np.asarray(variance), int(seeds), channel_correlation,
-                              exposure.white, exposure.flip_start, exposure.flip_stop)
+                              exposure.white, exposure.flip_start, exposure.flip_stop,
+                              seed_estimates=seed_estimates,
+                              independent_texels=independent_texels)
     values = []
     for region, region_mask in regions.items():
         mask = np.asarray(region_mask, bool)

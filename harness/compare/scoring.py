@@ -79,6 +79,8 @@ class View(NamedTuple):
     masks: dict[str, np.ndarray]
     exposure_mask: np.ndarray | None
     variance: np.ndarray | None = None
+    #: The reference's per-seed images (K, H, W, 3), where it keeps them.
+    seed_maps: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -175,7 +177,8 @@ def views_of(scene: Scene, geometry: SceneGeometry, method: RenderResult,
         views.append(View(f"receiver{i}", method_map.irradiance, ref_map.irradiance,
                           ind_map.irradiance,
                           {"full": np.ones(caustic.shape, bool), "caustic": caustic},
-                          {"mask_caustic": caustic}, None, ref_map.variance))
+                          {"mask_caustic": caustic}, None, ref_map.variance,
+                          ref_map.seed_maps))
     return views, notes
 
 
@@ -209,7 +212,10 @@ def _score_views(views: list[View], *, seeds: int | None, channel_correlation: f
         expo = exposure_for(view.reference, mask=view.exposure_mask)
         values, maps = score_view(view.name, view.method, view.reference, view.independent,
                                   regions=view.regions, exposure=expo, variance=view.variance,
-                                  seeds=seeds, channel_correlation=channel_correlation)
+                                  seeds=seeds, channel_correlation=channel_correlation,
+                                  seed_estimates=view.seed_maps,
+                                  # The camera's pixels share lookup texels' noise.
+                                  independent_texels=view.name != "camera")
         metrics += values
         images.update(maps)
         images[f"{view.name}/method"] = np.asarray(view.method, np.float32)

@@ -20,10 +20,12 @@ w(x) = 1 / (x² + ε) are w' = −2x / (x² + ε)², w'' = (6x² − 2ε) / (x²
 =================  ==========================================  ========================
 inputs             term                                        bias left
 =================  ==========================================  ========================
-R, v̂ ("taylor")    h(R) − ½ h''(R) v̂,  h(x) = w(x) (M − x)²    O(w' μ₃ + w v²/T²)
+R, v̂ ("taylor")    h(R) − ½ h''(R) v̂ + ⅛ h''''(R) v̂² (K−1)/(K+1)  −⅓ h''' μ₃ + O(w v³/T⁴)
+                   h(x) = w(x) (M − x)²
++ per-seed maps    the same + ⅓ h'''(R) k̂₃ / K²                O(h'''' κ₄ + w v³/T⁴)
 R, v̂, R', v̂'       ½ [w̃(R') (D² − v̂) + w̃(R) (D'² − v̂')],      O(w v²/T²)
 ("split")          w̃(X) = w(X) − ½ w''(X) v̂_X
-baseline           w(R) v̂ + w''(R) v̂² (K − 1)/(K + 1)            O(w' μ₃ + w v³/T⁴)
+baseline           w(R) v̂ + w''(R) v̂² (K − 1)/(K + 1)            O(w'' κ₄ + w v³/T⁴)
 =================  ==========================================  ========================
 
 Why: (M − R)² has expectation (M − T)² + v, so v̂ removes the noise, but a weight taken
@@ -34,9 +36,17 @@ h(x) = w(x)(M − x)², E[h(R)] = h(T) + ½ h''(T) v + O(μ₃), and E[h''(R) v�
 O(v²) because v̂ is independent of R (exactly so for Gaussian noise). The split term
 takes each weight from the *other*, independent reference, so weight and residual are
 independent and only the weight's curvature, E[w(X)] = w_T + ½ w'' v_X, needs the w̃
-correction; averaging both halves halves the noise. μ₃ is the third central moment of
-the reference's mean: for a photon count of N per texel it is ~T³/N², so the taylor
-term's bias is ~2/N² against a noise-only baseline of ~1/N, i.e. relatively 2/N.
+correction; averaging both halves halves the noise.
+
+Skew: μ₃ is the third central moment of the reference's mean, ~T³/N² for N photons per
+texel. E[h(R)] carries ⅙ h''' μ₃, and v̂ is not independent of R for skewed noise:
+Cov(R, v̂) = μ₃ (the sample mean and variance of K seeds), so E[h''(R) v̂] carries
+h''' μ₃ and the taylor term is biased by (⅙ − ½) h''' μ₃ = −⅓ h''' μ₃: for a perfect
+method h''' = 6 w' ≈ −12/T³, a bias of 4/N² against a baseline of 1/N, relatively 4/N.
+With the K per-seed maps (``seed_estimates``), k̂₃ = K Σ_k (x_k − x̄)³ / ((K − 1)(K − 2))
+(Fisher) gives k̂₃ / K², unbiased for μ₃ (:func:`noise_structure`), and ⅓ h'''(R) k̂₃ / K²
+is added. The baseline needs no such term: E[w(R) v̂] = w v + w' μ₃ + …, and a perfect
+method's E[w(R) (T − R)²] carries the same w' μ₃.
 
 Standard error (model-based, not design-based): the spread of the per-texel terms over
 the region is the spread of the *bias pattern*, which is fixed, not noise; the
@@ -50,10 +60,22 @@ split), so
 At b = 0 this is the 2 v² (1 + 1/(K − 1)) of the brief's (M − R)² − v̂; at b ≠ 0 the
 4 b² v term dominates. The plug-in α(R)² overstates α² by h''² v (its own noise), a
 100 % error at b = 0, so it is subtracted, and products v̂ v̂ are divided by
-E[v̂ v̂] / (v v) = 1 + 2ρ² / (K − 1).
+E[v̂ v̂] / (v v) = 1 + 2ρ² / (K − 1). The plug-in h''(R)² is itself inflated by R's noise
+(h'' moves with −6η/T through d = M − R: by about 72 v/T² at b = 0), in the quadratic
+part and in the linear part's subtraction alike; a second-order correction of it
+over-corrects at 10 % relative noise, so it is left, and the SE is conservative there
+(about 10 % high, docs/statistics.md). With the per-seed maps, k̂₃'s variance
+(⅓ h''')² 6 v³ / ((K − 1)(K − 2)) (Gaussian seeds) joins the quadratic part.
 
 Texels and channels: the photon tracer deposits each photon in the one texel its
-(u, v) falls in (nearest texel, ``renderers.mitsuba.photons``), so texels are
+(u, v) falls in (nearest texel, ``renderers.mitsuba.photons``), but one launch's photons
+are stratified (``renderers.mitsuba.emission``): neighbouring strata land in
+neighbouring texels, so neighbouring texels' noise anticorrelates (about −0.25 at lag 1).
+With the per-seed maps the pooled correlation ρ_o of each offset o within
+:data:`NEIGHBOUR_RADIUS` (:func:`noise_structure`) gives the pairs' covariances,
+c_ij = ρ_o σ_i σ_j, and the variance adds, over the region's pairs (both orders),
+ρ_o (α_i σ_i)(α_j σ_j) − h''_i h''_j c_ij² (the linear plug-in's excess) +
+2 β_i β_j c_ij² K/(K − 1) (:func:`_neighbour_variance`); without them texels are taken as
 independent. A texel's channels are one unit: a white or absorbed light's photons carry
 all three channels, so their noise is perfectly correlated (ρ = 1, the default); a
 dispersion scene traces one pass per channel (ρ = 0). Per texel the channels' terms are
@@ -77,7 +99,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import stdtrit
+from scipy.special import gammaln, stdtrit
 
 from harness.metrics.scores import RELMSE_EPSILON, MetricInputError, relative_mse
 
@@ -192,6 +214,141 @@ def _h_derivatives(method, x, eps):
     return h, h1, h2, h4
 
 
+def _h3(method, x, eps):
+    """h'''(x) = w''' d² − 6 w'' d + 6 w', d = M − x (Leibniz, as above)."""
+    d = method - x
+    return _d3w(x, eps) * d * d - 6.0 * _d2w(x, eps) * d + 6.0 * _dw(x, eps)
+
+
+def _c4(seeds: float) -> float:
+    """E[√v̂] / √v for a Gaussian variance with K − 1 degrees of freedom:
+    √(2 / (K − 1)) Γ(K / 2) / Γ((K − 1) / 2) (0.921 at K = 4, 0.983 at K = 16)."""
+    k = float(seeds)
+    return float(np.sqrt(2.0 / (k - 1.0)) * np.exp(gammaln(k / 2.0) - gammaln((k - 1.0) / 2.0)))
+
+
+@dataclass(frozen=True, eq=False)
+class NoiseStructure:
+    """What the per-seed maps say about the reference's noise beyond its variance.
+
+    Attributes
+    ----------
+    third_moment : ndarray (H, W, C) or None
+        Unbiased estimate of the third central moment (cumulant) of the reference's
+        *mean* per texel and channel, k̂₃ / K² with Fisher's
+        k₃ = K Σ_k (x_k − x̄)³ / ((K − 1)(K − 2)) over the K seed estimates x_k (cubed
+        image units); None below K = 3 seeds.
+    correlation : dict of (int, int) to float
+        Pooled correlation of the noise at texel offset (dy, dx) (one of each
+        ± pair, dy ≥ 0): Σ ĉ_ij / √(Σ v̂_i Σ v̂_j) over the pairs (i, j = i + offset)
+        of the region and over channels, ĉ_ij = Σ_k (x_ik − x̄_i)(x_jk − x̄_j) /
+        (K (K − 1)) the unbiased covariance of the two texels' means.
+    seeds : int
+        K.
+    """
+
+    third_moment: np.ndarray | None
+    correlation: dict
+    seeds: int
+
+
+#: Radius (texels) of the square window of neighbour offsets whose noise covariance
+#: enters the standard error. A photon lands in one texel, so the only source of
+#: covariance between texels is the stratified emission of one launch: neighbouring
+#: strata land in neighbouring texels, and a stratum that lands in one cannot land in
+#: the next (negative correlation: about −0.25 at lag 1 in the calibration's
+#: simulation, below 0.01 past one texel there; −0.16 along u and −0.24 along v on the
+#: photon tracer's small glass sphere, within 0.1 of 0 at two texels). Offsets past the
+#: radius are taken as uncorrelated.
+NEIGHBOUR_RADIUS = 2
+
+
+def _offsets(radius: int):
+    """Offsets (dy, dx) of the half window: dy > 0, or dy = 0 and dx > 0."""
+    return [(dy, dx) for dy in range(radius + 1) for dx in range(-radius, radius + 1)
+            if dy > 0 or dx > 0]
+
+
+def _pairs(array: np.ndarray, dy: int, dx: int):
+    """The views (a_i, a_j) of ``array`` (H, W, ...) with j = i + (dy, dx), dy ≥ 0."""
+    h, w = array.shape[:2]
+    if dy >= h or abs(dx) >= w:
+        return None
+    xa = slice(0, w - dx) if dx >= 0 else slice(-dx, w)
+    xb = slice(dx, w) if dx >= 0 else slice(0, w + dx)
+    return array[0:h - dy, xa], array[dy:h, xb]
+
+
+def noise_structure(seed_estimates, *, mask=None,
+                    radius: int = NEIGHBOUR_RADIUS) -> NoiseStructure:
+    """The reference's noise structure from its K per-seed maps (:class:`NoiseStructure`).
+
+    Parameters
+    ----------
+    seed_estimates : ndarray (K, H, W, C)
+        Each seed's estimate of the image (the reference is their mean; its variance
+        of the mean is their unbiased variance / K).
+    mask : ndarray (H, W) of bool, optional
+        The region the correlations are pooled over (both texels of a pair inside it;
+        default every texel). The same region the excess is scored over.
+    radius : int
+        Offsets up to ``radius`` texels in each direction.
+    """
+    x = np.asarray(seed_estimates, np.float64)
+    if x.ndim != 4 or x.shape[0] < 2:
+        raise MetricInputError(f"seed estimates must be (K >= 2, H, W, C), got {x.shape}")
+    if not np.isfinite(x).all():
+        raise MetricInputError("seed estimates must be finite")
+    k = x.shape[0]
+    sel = np.ones(x.shape[1:3], bool) if mask is None else np.asarray(mask, bool)
+    if sel.shape != x.shape[1:3]:
+        raise MetricInputError(f"mask {sel.shape} does not match {x.shape[1:3]}")
+    dev = x - x.mean(axis=0)
+    third = None
+    if k >= 3:
+        third = k * (dev**3).sum(axis=0) / ((k - 1.0) * (k - 2.0)) / (k * k)
+    var = (dev * dev).sum(axis=0) / (k * (k - 1.0))  # v̂ of the mean, (H, W, C)
+    correlation = {}
+    for dy, dx in _offsets(int(radius)):
+        pair = _pairs(np.moveaxis(dev, 0, -1), dy, dx)  # (.., C, K)
+        if pair is None:
+            continue
+        inside = _pairs(sel, dy, dx)
+        both = inside[0] & inside[1]
+        if not both.any():
+            continue
+        va, vb = _pairs(var, dy, dx)
+        cov = (pair[0][both] * pair[1][both]).sum() / (k * (k - 1.0))
+        scale = np.sqrt(float(va[both].sum()) * float(vb[both].sum()))
+        correlation[(dy, dx)] = float(cov / scale) if scale > 0 else 0.0
+    return NoiseStructure(third_moment=third, correlation=correlation, seeds=k)
+
+
+def _neighbour_variance(g, hh, v, sel, *, noise: NoiseStructure, rho, k: float):
+    """Σ over texel pairs i ≠ j of the region of the terms' covariances (both orders):
+    linear ρ_o Σ_cc' P_cc' (g_ic σ_ic)(g_jc' σ_jc') with the plug-in's excess
+    E[g(R_i) g(R_j)] − g_i g_j = h''_i h''_j c_ij removed, and quadratic
+    2 β_i β_j c_ij² K / (K − 1) per channel pair (β = ½ h'', Cov of η² − v̂ for
+    Gaussian noise), c_ij = ρ_o P_cc' σ_ic σ_jc' with ρ_o the pooled correlation of the
+    offset and P the channels' correlation. E[σ̂_i σ̂_j] = c₄² σ_i σ_j (independent
+    variance estimates) is divided out."""
+    s = np.sqrt(v)
+    c4sq = _c4(k) ** 2
+    linear = quadratic = 0.0
+    for (dy, dx), r in noise.correlation.items():
+        if r == 0.0:
+            continue
+        inside = _pairs(sel, dy, dx)
+        both = inside[0] & inside[1]
+        gs_a, gs_b = (a[both] for a in _pairs(g * s, dy, dx))  # (n, C)
+        hv_a, hv_b = (a[both] for a in _pairs(hh * v, dy, dx))
+        cross = np.einsum("nc,cd,nd->", gs_a, rho, gs_b) / c4sq
+        plug = np.einsum("nc,cd,nd->", hv_a, rho * rho, hv_b)
+        linear += 2.0 * (r * cross - r * r * plug)
+        quadratic += 2.0 * 0.5 * r * r * plug * k / (k - 1.0)
+    return float(linear), float(quadratic)
+
+
 def _channel_rho(channels: int, rho: float) -> np.ndarray:
     """(C, C) correlation of the channels' noise: 1 on the diagonal, ρ elsewhere."""
     r = np.full((channels, channels), float(rho))
@@ -203,7 +360,8 @@ def relmse_variance_terms(method, reference, variance, *, seeds: int,
                           independent=None, independent_variance=None,
                           independent_seeds: int | None = None,
                           channel_correlation: float = 1.0,
-                          epsilon: float = RELMSE_EPSILON):
+                          epsilon: float = RELMSE_EPSILON,
+                          noise: NoiseStructure | None = None):
     """Per-texel excess terms and their model variances (the parts of
     :func:`excess_relative_mse`, exposed for maps and for pooling regions).
 
@@ -248,10 +406,23 @@ def relmse_variance_terms(method, reference, variance, *, seeds: int,
         # E[½ h''(R) v̂] − h(T) = (1/24 − 1/4) h · 3v²/3 = −⅛ h v² (Gaussian
         # μ₄ = 3v²), is added back with E[v̂²] = v² (K + 1)/(K − 1).
         terms = h - 0.5 * hh * v + 0.125 * h4 * v * v * (k - 1.0) / (k + 1.0)
+        h3 = _h3(m, r, epsilon)
         gg = g[..., :, None] * g[..., None, :]
         hhhh = hh[..., :, None] * hh[..., None, :]
         linear = gg * ss - rho * hhhh * vv / f
         quadratic = 0.5 * hhhh * vv * k / ((k - 1.0) * f)
+        if noise is not None and noise.third_moment is not None:
+            # Skewed noise: E[h(R)] carries ⅙ h''' μ₃ and E[h''(R) v̂] carries h''' μ₃
+            # (Cov(R, v̂) = μ₃ of the mean), so the term above is biased by −⅓ h''' μ₃;
+            # k̂₃ is unbiased for μ₃. Its own variance, 6 v³ / ((K − 1)(K − 2)) for
+            # Gaussian seeds, scaled by (⅓ h''')², joins the quadratic part (channels
+            # correlated as ρ², like the other squared terms).
+            k3 = np.asarray(noise.third_moment, np.float64)
+            if k3.shape != r.shape:
+                raise MetricInputError(f"third moment {k3.shape} differs from {r.shape}")
+            terms = terms + h3 * k3 / 3.0
+            t3 = h3 / 3.0 * np.sqrt(6.0 * v**3 / ((k - 1.0) * (k - 2.0)))
+            quadratic = quadratic + t3[..., :, None] * t3[..., None, :]
         dof = seeds - 1
     else:
         if independent_variance is None:
@@ -298,7 +469,9 @@ def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
                         independent=None, independent_variance=None,
                         independent_seeds: int | None = None,
                         channel_correlation: float = 1.0,
-                        epsilon: float = RELMSE_EPSILON) -> ExcessError:
+                        epsilon: float = RELMSE_EPSILON,
+                        seed_estimates=None,
+                        neighbour_radius: int = NEIGHBOUR_RADIUS) -> ExcessError:
     """The method's relMSE against the noise-free image, unbiased, with its standard
     error and 95 % interval (module docstring).
 
@@ -325,22 +498,52 @@ def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
         (dispersion).
     epsilon : float
         relMSE's regulariser (squared image units).
+    seed_estimates : ndarray (K, H, W, 3), optional
+        The reference's K per-seed images (their mean is ``reference``, their unbiased
+        variance / K is ``variance``). With them (one reference only) the term's
+        third-moment bias is removed and the standard error includes the covariance
+        of neighbouring texels' noise (:func:`noise_structure`, pooled over ``mask``);
+        without them the noise is taken as symmetric and texels as independent.
+    neighbour_radius : int
+        Offsets (texels) whose covariance is included (:data:`NEIGHBOUR_RADIUS`).
     """
     value = relative_mse(method, reference, mask=mask, epsilon=epsilon)
+    sel = (np.ones(np.shape(reference)[:2], bool) if mask is None
+           else np.asarray(mask, bool))
+    noise = None
+    if seed_estimates is not None and independent is None:
+        seed_estimates = np.asarray(seed_estimates)
+        if seed_estimates.shape[1:] != np.shape(reference) or seed_estimates.shape[0] != seeds:
+            raise MetricInputError(f"seed estimates {seed_estimates.shape} are not {seeds} "
+                                   f"images of {np.shape(reference)}")
+        noise = noise_structure(seed_estimates, mask=sel, radius=neighbour_radius)
     terms, (linear, quadratic), baseline, dof = relmse_variance_terms(
         method, reference, variance, seeds=seeds, independent=independent,
         independent_variance=independent_variance, independent_seeds=independent_seeds,
-        channel_correlation=channel_correlation, epsilon=epsilon)
-    sel = np.ones(terms.shape[:2], bool) if mask is None else np.asarray(mask, bool)
+        channel_correlation=channel_correlation, epsilon=epsilon, noise=noise)
     count = terms[sel].size  # texels x channels, as relMSE averages
     excess = float(terms[sel].sum()) / count
+    cross_linear = cross_quadratic = 0.0
+    if noise is not None and noise.correlation:
+        m = np.asarray(method, np.float64)
+        r = np.asarray(reference, np.float64)
+        _, g, hh, _ = _h_derivatives(m, r, epsilon)
+        cross_linear, cross_quadratic = _neighbour_variance(
+            g, hh, np.asarray(variance, np.float64), sel, noise=noise,
+            rho=_channel_rho(r.shape[2], channel_correlation), k=float(seeds))
     # The linear part's plug-in correction assumes the stated channel correlation; if
-    # the channels are in fact less correlated it overshoots and the part's sum can go
-    # negative. It is floored at 0 as a sum (not per texel, which would bias a correct
-    # specification upwards), so a wrong ρ = 1 leaves the quadratic part's (then
-    # overstated) variance rather than none.
+    # the channels are in fact less correlated it overshoots and the part's sum goes
+    # negative, about −100 % of the quadratic part for a wrong ρ = 1 at b = 0. Even a
+    # correct one is slightly negative near b = 0: its subtraction h''(R)² v̂² is
+    # inflated by R's noise like the quadratic part (by ~72 v/T²), about −10 % of the
+    # quadratic part at 10 % relative noise, which that part's own inflation offsets.
+    # So the sum (not each texel, which would bias a correct specification upwards) is
+    # floored at −½ of the quadratic part: a correct ρ keeps the offset, a wrong ρ = 1
+    # keeps half the quadratic part's (then overstated) variance rather than none.
     texel_var = linear[sel] + quadratic[sel]
-    total = max(float(linear[sel].sum()), 0.0) + float(quadratic[sel].sum())
+    quadratic_total = float(quadratic[sel].sum()) + cross_quadratic
+    total = (max(float(linear[sel].sum()) + cross_linear, -0.5 * quadratic_total)
+             + quadratic_total)
     stderr = float(np.sqrt(max(total, 0.0))) / count
     spread = float(np.sum(texel_var**2))
     df = total**2 / (spread / dof) if spread > 0 and total > 0 else float("inf")

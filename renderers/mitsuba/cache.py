@@ -2,7 +2,8 @@
 
 A result directory holds ``camera.exr``, ``receiver_irradiance.exr`` (receiver 0),
 ``receiver_irradiance_1.exr``, ... (further receivers), each with an ``RGB`` layer
-(mean) and a ``variance`` layer (variance of the mean over K seeds), and
+(mean) and a ``variance`` layer (variance of the mean over K seeds), the receivers'
+also with the K seeds' own maps (layers ``seed0`` … ``seed{K-1}``), and
 ``result.json``: the metadata, the SHA-256 and (H, W) of every EXR (``files``,
 ``shapes``), and ``document_sha256``, the SHA-256 of the rest of the JSON itself
 (canonical form: keys sorted, no whitespace), so the manifest covers the JSON as
@@ -75,8 +76,9 @@ __all__ = ["CAMERA_INTEGRATORS", "FORMAT_VERSION", "STALE_AFTER", "CacheEntryErr
 #: two whole launches, the noise per RGB channel over the comparison's caustic region
 #: with launches past the budget until the target (``relative_noise_per_channel``,
 #: ``reference_time_cap``, ``stopped_by`` ``time_cap``), and all-paths mode plays
-#: Russian roulette past 64 events up to a 4096-event safety cap
-FORMAT_VERSION = 8
+#: Russian roulette past 64 events up to a 4096-event safety cap; 9: each receiver EXR
+#: also holds the K seeds' own maps (layers ``seed0`` … ``seed{K-1}``)
+FORMAT_VERSION = 9
 RESULT_JSON = "result.json"
 #: Camera integrators of the reference (``render_reference(camera=...)``), and the name
 #: each records as ``camera_integrator`` in its metadata.
@@ -203,6 +205,8 @@ def write_result_dir(directory: str | Path, result: RenderResult,
             layers = {"RGB": rmap.irradiance}
             if rmap.variance is not None:
                 layers["variance"] = rmap.variance
+            if rmap.seed_maps is not None:
+                layers.update({f"seed{k}": m for k, m in enumerate(rmap.seed_maps)})
             layers_of[receiver_file_name(i)] = layers
         for name, layers in layers_of.items():
             write_exr(staging / name, layers)
@@ -328,15 +332,25 @@ def _check_document(document: dict, path: Path) -> None:
             raise bad(f"shapes[{name!r}] is not [height, width]")
 
 
+def _seed_layers(layers: dict) -> list[str]:
+    """The per-seed layers' names, ``seed0``, ``seed1``, … in seed order."""
+    return sorted((n for n in layers if re.fullmatch(r"seed\d+", n)), key=lambda n: int(n[4:]))
+
+
 def _check_layers(layers: dict, shape: list[int], path: Path) -> None:
-    """The EXR holds an (H, W, 3) ``RGB`` layer and, if any, a same-sized variance."""
+    """The EXR holds an (H, W, 3) ``RGB`` layer and, if any, a same-sized variance and
+    per-seed layers ``seed0`` … ``seed{K-1}`` (none, or K >= 2 without a gap)."""
     want = (*shape, 3)
-    for name in ("RGB", "variance"):
+    seeds = _seed_layers(layers)
+    for name in ("RGB", "variance", *seeds):
         if name == "RGB" and name not in layers:
             raise CacheEntryError(f"{path}: no RGB layer")
         if name in layers and layers[name].shape != want:
             raise CacheEntryError(f"{path}: layer {name} is {layers[name].shape}, "
                                   f"expected {want}")
+    if seeds and (len(seeds) < 2 or seeds != [f"seed{k}" for k in range(len(seeds))]):
+        raise CacheEntryError(f"{path}: per-seed layers {seeds} are not seed0 … seed(K-1), "
+                              f"K >= 2")
 
 
 def read_result_dir(directory: str | Path) -> RenderResult:
@@ -368,7 +382,9 @@ def read_result_dir(directory: str | Path) -> RenderResult:
     receivers = []
     for i, extent in enumerate(document["receiver_extent"]):
         layers = layers_of[receiver_file_name(i)]
-        receivers.append(ReceiverMap(layers["RGB"], tuple(extent), layers.get("variance")))
+        seeds = _seed_layers(layers)
+        receivers.append(ReceiverMap(layers["RGB"], tuple(extent), layers.get("variance"),
+                                     np.stack([layers[n] for n in seeds]) if seeds else None))
     metadata = {k: v for k, v in document.items()
                 if k not in ("renderer", "effects", "timings", "timer")}
     metadata["camera_variance"] = camera.get("variance")

@@ -336,7 +336,8 @@ class ReceiverRounds:
         traced = self.photons = self.photons + int(photons)
         channels, maps, caustic_maps, counts = [], [], [], []
         for r in range(n_rec):
-            cmean, cvar = seed_statistics(np.stack([c[r] for c in self._caustic]) / traced)
+            per_seed = np.stack([c[r] for c in self._caustic]) / traced
+            cmean, cvar = seed_statistics(per_seed)
             # Noise of what is compared: the caustic map, per channel, over the
             # region the comparison scores.
             region = caustic_region(cmean)
@@ -347,7 +348,8 @@ class ReceiverRounds:
                 maps.append(ReceiverMap(mean.astype(np.float32), self.extents[r],
                                         var.astype(np.float32)))
             caustic_maps.append(ReceiverMap(cmean.astype(np.float32), self.extents[r],
-                                            cvar.astype(np.float32)))
+                                            cvar.astype(np.float32),
+                                            seed_maps=per_seed.astype(np.float32)))
         self._maps, self._caustic_maps = maps, caustic_maps
         self.per_channel, self.region_texels = _largest(channels), tuple(counts)
         finite = self.per_channel[np.isfinite(self.per_channel)]

@@ -1,8 +1,10 @@
 """Verdicts from intervals, end to end through the pipeline, with two test plug-in
 methods on the small glass sphere: a "perfect" method (an independent Mitsuba
-reference with 16 times the photons, so its own noise is about 1/16 of the
+reference with 64 times the photons, so its own variance is about 1/64 of the
 reference's) is not called off, its excess interval containing 0; the same image
 × 1.02 is called off, with an excess within 2 standard errors of its exact value.
+The reference keeps its 4 per-seed maps, so the intervals carry the photon noise's skew
+and its neighbouring texels' covariance (``harness.metrics.excess``).
 
 Kind: physical requirement of the harness's statistics (they must hold for any
 method; nothing here is calibrated from a method's output)."""
@@ -41,7 +43,7 @@ class FromReference:
     def __init__(self, *, scale: float, cache: str):
         self.scale, self.cache = scale, cache
         self.name = f"reference-x{scale:g}"
-        self.description = "a 16x-photon reference on other seeds, scaled"
+        self.description = "a 64x-photon reference on other seeds, scaled"
 
     def configure(self, scene):
         return scene
@@ -52,7 +54,8 @@ class FromReference:
                                      "seed": s.seed + 100 * s.seeds})
         result = render_reference(high, cache=self.cache, progress=False)
         return dataclasses.replace(result, receivers=tuple(
-            dataclasses.replace(r, irradiance=r.irradiance * self.scale, variance=None)
+            dataclasses.replace(r, irradiance=r.irradiance * self.scale, variance=None,
+                                seed_maps=None)
             for r in result.receivers), camera=result.camera * self.scale)
 
 
@@ -65,6 +68,8 @@ def verdicts(tmp_path_factory):
     options = CompareOptions(studies=("metrics",), quick=True, progress=False,
                              cache=str(folder / "cache"))
     references = render_references(scene, options)
+    # The per-seed maps reach the scoring (non-vacuity of the photon-noise terms).
+    assert references.reference.receivers[0].seed_maps.shape == (4, 64, 64, 3)
     return {scale: run_comparison(scene, FromReference(scale=scale, cache=options.cache),
                                   options=options, references=references)
             for scale in (1.0, 1.02)}
@@ -84,7 +89,7 @@ def test_a_perfect_method_is_not_called_off(verdicts):
 def test_a_two_percent_bias_is_called_off_with_its_exact_excess(verdicts):
     """The same image × 1.02 is measurably off; its excess is within 2 standard errors
     of the exact value, relMSE(1.02 P, P) over the same region with P the perfect
-    method's image (its noise, 1/16 of the reference's, is small here)."""
+    method's image (its variance, 1/64 of the reference's, is small here)."""
     biased, perfect = verdicts[1.02], verdicts[1.0]
     m = biased.metric("receiver0", "caustic", "relmse")
     assert m.distinguishable and m.excess_ci95[0] > 0

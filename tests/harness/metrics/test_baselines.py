@@ -26,14 +26,17 @@ def test_ssim_interval_of_a_perfect_method_mostly_contains_zero():
     """M = T, K = 16, 100 seeded references: the excess interval contains 0 in most
     trials. Measured 85 %, not 95 %: the denoised reference keeps some noise at the
     disc's edge, so the baseline reads ~0.001 too high (the bound 75 % leaves 2.8
-    binomial sd below the measured rate)."""
+    binomial sd below the measured rate). The reference's noise is Gaussian here, so the
+    baseline simulates Gaussian noise (``noise="gaussian"``); with the default
+    photon-like noise, which this reference does not have, 76 of 100."""
     rng = np.random.default_rng(0)
     truth = _truth()
     contains = 0
     for i in range(100):
         reference, variance = _reference(rng, truth, 16, 1.0)
         r = perceptual_excess(truth, reference, variance, metric=ssim_map(white=WHITE),
-                              higher_is_better=True, trials=4, resamples=200, seed=i)
+                              higher_is_better=True, trials=4, resamples=200, seed=i,
+                              noise="gaussian")
         contains += r.excess_ci95[0] <= 0.0 <= r.excess_ci95[1]
     print(f"perfect method: interval contains 0 in {contains} of 100")
     assert contains >= 75
@@ -82,3 +85,22 @@ def test_denoised_reference_removes_noise_where_the_truth_is_flat():
     assert clean < 0.3 * noisy, (clean, noisy)
     with pytest.raises(MetricInputError, match="2 trials"):
         perceptual_baseline(reference, variance, metric=ssim_map(white=WHITE), trials=1)
+
+
+def test_noise_models_and_their_input_errors():
+    """The seeds' noise needs an even number of per-seed images of the reference's size;
+    an unknown noise model is refused; every model gives a finite baseline."""
+    rng = np.random.default_rng(4)
+    truth = _truth(16)
+    reference, variance = _reference(rng, truth, 4, 1.0)
+    metric = ssim_map(white=WHITE)
+    seeds = reference + rng.standard_normal((4, *reference.shape)) * np.sqrt(variance)
+    for noise, extra in (("photon", {}), ("gaussian", {}), ("seeds", {"seed_estimates": seeds})):
+        base = perceptual_baseline(reference, variance, metric=metric, trials=2, noise=noise,
+                                   **extra)
+        assert np.isfinite(base.baseline) and base.baseline < 1.0, noise
+    with pytest.raises(MetricInputError, match="even number"):
+        perceptual_baseline(reference, variance, metric=metric, noise="seeds",
+                            seed_estimates=seeds[:3])
+    with pytest.raises(MetricInputError, match="noise must be"):
+        perceptual_baseline(reference, variance, metric=metric, noise="uniform")

@@ -94,6 +94,14 @@ def test_second_call_hits_and_returns_the_same_arrays(tiny, tmp_path):
     np.testing.assert_array_equal(first.camera, second.camera)
     np.testing.assert_array_equal(first.receivers[0].irradiance, second.receivers[0].irradiance)
     np.testing.assert_array_equal(first.receivers[0].variance, second.receivers[0].variance)
+    # The K seeds' own maps travel too, and are what the mean and variance came from.
+    seeds = second.receivers[0].seed_maps
+    np.testing.assert_array_equal(first.receivers[0].seed_maps, seeds)
+    assert seeds.shape == (2, 16, 16, 3)
+    np.testing.assert_allclose(seeds.mean(axis=0), second.receivers[0].irradiance,
+                               rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(seeds.var(axis=0, ddof=1) / 2, second.receivers[0].variance,
+                               rtol=1e-4, atol=1e-9)
     assert second.metadata["photons"] == first.metadata["photons"]
     assert second.metadata["event_chains"] == ["L D", "L T T D (objects[0])"]
 
@@ -350,6 +358,19 @@ def test_an_exr_of_the_wrong_size_is_a_miss(entry):
     _rewrite(folder, lambda d: d["files"].update({"receiver_irradiance.exr": digest}),
              fix_digest=True)
     assert "layer RGB is (8, 8, 3), expected (16, 16, 3)" in _invalid(root, key)
+
+
+def test_per_seed_layers_with_a_gap_are_a_miss(entry):
+    """Per-seed layers must be seed0 … seed(K-1): an EXR holding seed0 and seed2 is
+    refused (its SHA-256 re-recorded, so only the layer check can catch it)."""
+    root, key, folder = entry
+    exr = folder / "receiver_irradiance.exr"
+    zeros = np.zeros((16, 16, 3), np.float32)
+    write_exr(exr, {"RGB": zeros, "variance": zeros, "seed0": zeros, "seed2": zeros})
+    digest = file_sha256(exr)
+    _rewrite(folder, lambda d: d["files"].update({"receiver_irradiance.exr": digest}),
+             fix_digest=True)
+    assert "per-seed layers ['seed0', 'seed2']" in _invalid(root, key)
 
 
 def test_an_entry_under_another_key_is_a_miss(entry):
