@@ -84,7 +84,7 @@ def caustic_relmse(reference, method, region: np.ndarray, *, seeds: int,
     ref, met = np.asarray(reference.irradiance), np.asarray(method.irradiance)
     mask = np.asarray(region, bool)
     inputs = ExcessInputs(np.asarray(reference.variance), int(seeds), channel_correlation,
-                          1.0, 0.0, 0.0)
+                          1.0, 0.0, 0.0, seed_estimates=reference.seed_maps)
     excess = metric_excess("relmse", met, ref, mask, inputs, maps={})
     return MetricValue(view, "caustic", "relmse",
                        score_value("relmse", met, ref, mask=mask, exposure=None),

@@ -164,6 +164,7 @@ class ConvergenceStudy:
                                       max_iterations=top,
                                       exposure=exposure_for(reference.irradiance),
                                       variance=reference.variance,
+                                      seed_maps=reference.seed_maps,
                                       seeds=int(seeds) if seeds else None,
                                       channel_correlation=channel_correlation(context.scene),
                                       progress=tick)
@@ -197,7 +198,8 @@ class CostStudy:
                 reference_photons=int(reference.metadata["photons"]), quick=quick,
                 progress=tick, reference_variance=ref0.variance if seeds else None,
                 reference_seeds=int(seeds) if seeds else None,
-                channel_correlation=channel_correlation(context.scene))
+                channel_correlation=channel_correlation(context.scene),
+                reference_seed_maps=ref0.seed_maps)
         return CostSection(outcome.table, outcome.warm, outcome.cold, outcome.point,
                            outcome.timing())
 

@@ -370,7 +370,8 @@ def _fieller(num: float, den: float, *, v_num: float, v_den: float, cov: float,
 def excess_ratio(method_one: np.ndarray, method_last: np.ndarray, reference: np.ndarray,
                  variance: np.ndarray, *, seeds: int, mask: np.ndarray,
                  channel_correlation: float = 1.0,
-                 epsilon: float = RELMSE_EPSILON) -> ExcessRatio:
+                 epsilon: float = RELMSE_EPSILON,
+                 seed_estimates: np.ndarray | None = None) -> ExcessRatio:
     """e₁ / e_N of two method images' excess relMSEs against one reference, with
     Fieller's 95 % interval (module docstring).
 
@@ -390,6 +391,9 @@ def excess_ratio(method_one: np.ndarray, method_last: np.ndarray, reference: np.
         three channels, 0 for one pass per channel (dispersion).
     epsilon : float
         relMSE's regulariser ((W/m²)²).
+    seed_estimates : ndarray (K, H, W, 3), optional
+        The reference's per-seed maps: each excess uses them as the comparison's
+        records do (``harness.metrics.excess``); their correlation stays the model's.
 
     Raises
     ------
@@ -401,7 +405,8 @@ def excess_ratio(method_one: np.ndarray, method_last: np.ndarray, reference: np.
         raise MetricInputError("the scored region is empty")
     one, last = (excess_relative_mse(m, reference, variance, seeds=seeds, mask=mask,
                                      channel_correlation=channel_correlation,
-                                     epsilon=epsilon) for m in (method_one, method_last))
+                                     epsilon=epsilon, seed_estimates=seed_estimates)
+                 for m in (method_one, method_last))
     cov = _excess_covariance((method_one, method_last), reference, variance, seeds=seeds,
                              mask=mask, rho=channel_correlation, epsilon=epsilon)
     scale = math.sqrt(cov[0, 0] * cov[1, 1]) if cov[0, 0] > 0 and cov[1, 1] > 0 else 0.0
@@ -622,4 +627,5 @@ def _excess_ratio_of(runner, reference, relmse: dict[int, float], *, seeds: int,
     # A dispersion scene's reference traces one photon pass per channel.
     rho = 0.0 if "dispersion" in frames[0].result.effects else 1.0
     return excess_ratio(maps[0], maps[1], reference.irradiance, variance, seeds=seeds,
-                        mask=region, channel_correlation=rho)
+                        mask=region, channel_correlation=rho,
+                        seed_estimates=getattr(reference, "seed_maps", None))

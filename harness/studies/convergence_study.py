@@ -39,7 +39,7 @@ def texel_footprint(runner: RealtimeRunner, hits: dict, points: np.ndarray) -> n
                                        size=runner.scene.settings.caustic_map)
 
 
-def _excess(method, reference, caustic, *, variance, seeds, rho
+def _excess(method, reference, caustic, *, variance, seeds, rho, seed_maps
             ) -> tuple[float, float, float]:
     """(excess relMSE, its 95 % interval's low and high end), NaN where it cannot be
     estimated (no variance, fewer than two seeds, an empty region)."""
@@ -47,7 +47,7 @@ def _excess(method, reference, caustic, *, variance, seeds, rho
         return (float("nan"),) * 3
     try:
         e = excess_relative_mse(method, reference, variance, seeds=seeds, mask=caustic,
-                                channel_correlation=rho)
+                                channel_correlation=rho, seed_estimates=seed_maps)
     except MetricInputError:
         return (float("nan"),) * 3
     return e.excess, *e.excess_ci95
@@ -56,7 +56,8 @@ def _excess(method, reference, caustic, *, variance, seeds, rho
 def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarray, *,
                       max_iterations: int = 8, configs=CONFIGS, exposure=None,
                       variance: np.ndarray | None = None, seeds: int | None = None,
-                      channel_correlation: float = 1.0, progress=None) -> Table:
+                      channel_correlation: float = 1.0, seed_maps: np.ndarray | None = None,
+                      progress=None) -> Table:
     """The convergence table (columns :data:`COLUMNS`).
 
     Parameters
@@ -73,6 +74,9 @@ def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np
         (``excess_low``, ``excess_high``); NaN without them.
     channel_correlation
         1 when the same photons carry all three channels, 0 for one pass per channel.
+    seed_maps
+        The reference's per-seed maps (K, H, W, 3), used by the excess as by the
+        comparison's records (``harness.metrics.excess``); None: without.
     progress
         Optional callable advanced once per render.
     """
@@ -102,7 +106,7 @@ def convergence_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np
             relmse = score_value("relmse", method_map, reference, mask=caustic,
                                  exposure=exposure)
             excess = _excess(method_map, reference, caustic, variance=variance, seeds=seeds,
-                             rho=channel_correlation)
+                             rho=channel_correlation, seed_maps=seed_maps)
             rows.append((estimator, safeguarded, k, stats.mean_error_m, stats.p95_error_m,
                          stats.max_error_m, stats.mean_error_texels, stats.p95_error_texels,
                          stats.max_error_texels, stats.converged, stats.diverged,

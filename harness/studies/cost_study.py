@@ -136,7 +136,7 @@ def _label(config: dict) -> str:
 
 
 def _method_error(image: np.ndarray, reference: np.ndarray, caustic: np.ndarray, *,
-                  variance, seeds, channel_correlation) -> dict:
+                  variance, seeds, channel_correlation, seed_estimates=None) -> dict:
     """A configuration's raw relMSE and, with the reference's variance, its excess with
     the model-based interval (the method's image is fixed, the reference's noise is the
     randomness: :mod:`harness.metrics.excess`)."""
@@ -145,7 +145,8 @@ def _method_error(image: np.ndarray, reference: np.ndarray, caustic: np.ndarray,
         return {"relmse": raw, "noise": math.nan, "excess": raw, "excess_stderr": 0.0,
                 "excess_low": raw, "excess_high": raw, "excess_dof": math.inf}
     e = excess_relative_mse(image, reference, variance, seeds=seeds, mask=caustic,
-                            channel_correlation=channel_correlation)
+                            channel_correlation=channel_correlation,
+                            seed_estimates=seed_estimates)
     return {"relmse": e.value, "noise": e.baseline, "excess": e.excess,
             "excess_stderr": e.excess_stderr, "excess_low": e.excess_ci95[0],
             "excess_high": e.excess_ci95[1], "excess_dof": e.degrees_of_freedom}
@@ -162,7 +163,8 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
                reference_photons: int, quick: bool = False, progress=None,
                reference_variance: np.ndarray | None = None,
                reference_seeds: int | None = None,
-               channel_correlation: float = 1.0) -> CostOutcome:
+               channel_correlation: float = 1.0,
+               reference_seed_maps: np.ndarray | None = None) -> CostOutcome:
     """Sweep the method's configurations and trace the reference's curve.
 
     Parameters
@@ -181,6 +183,10 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
         K, the seeds behind ``reference_variance`` (required with it).
     channel_correlation : float
         1 when the same photons carry all three channels, 0 for one pass per channel.
+    reference_seed_maps : ndarray (K, H, W, 3), optional
+        The reference's per-seed maps: the method rows' excess uses them as the
+        comparison's records do (``harness.metrics.excess``), so the scene-settings
+        row quotes the record's number.
     """
     if reference_variance is not None and reference_seeds is None:
         raise ValueError("reference_variance needs reference_seeds")
@@ -193,7 +199,7 @@ def cost_study(runner: RealtimeRunner, reference: np.ndarray, caustic: np.ndarra
     for config, label in configs:
         frame, seconds = runner.timed(clock=caustic_seconds, **config)
         error = _method_error(frame.result.receivers[0].irradiance, reference, caustic,
-                              **noise_model)
+                              **noise_model, seed_estimates=reference_seed_maps)
         dofs.append(error.pop("excess_dof"))
         merged = {"estimator": s.estimator, "iterations": s.iterations, "grid": s.grid,
                   "caustic_map": s.caustic_map, "splat_sigma": s.splat_sigma, **config}
