@@ -231,12 +231,18 @@ def _metric_cell(comparison: SceneComparison, view: str, region: str,
         cell["floor_why"] = ("no noise floor", "No independent reference was scored "
                              "against the reference.")
     if mv.excess is None:
-        cell["excess_why"] = (
-            ("no variance", f"The reference records no per-pixel variance for {view}, "
-             "so the method's own error is not estimated.")
-            if f"{view}/reference_variance" not in comparison.images
-            else ("not estimated", f"The comparison carries no estimate of the method's "
-                  f"own {metric} error."))
+        if f"{view}/reference_variance" not in comparison.images:
+            cell["excess_why"] = ("no variance", f"The reference records no per-pixel "
+                                  f"variance for {view}, so the method's own error is not "
+                                  "estimated.")
+        elif view == "camera":
+            cell["excess_why"] = ("no interval", "The camera's pixels read the caustic from "
+                                  "shared lookup texels, so their noise is not independent "
+                                  "and no interval is given for this view: see the receiver "
+                                  "maps' verdicts.")
+        else:
+            cell["excess_why"] = ("not estimated", f"The comparison carries no estimate of "
+                                  f"the method's own {metric} error.")
     return cell
 
 

@@ -85,14 +85,16 @@ def count_by_kind(checks) -> dict[str, dict[str, int]]:
     return out
 
 
-def _maps(images: dict[str, np.ndarray], geometry, layer: str) -> list[ReceiverMap]:
+def _maps(images: dict[str, np.ndarray], geometry, layer: str,
+          seed_maps=None) -> list[ReceiverMap]:
     maps = []
     for i, receiver in enumerate(geometry.receivers):
-        variance = None
+        variance = seeds = None
         if layer == "reference":
             variance = images.get(f"receiver{i}/reference_variance")
+            seeds = seed_maps[i] if seed_maps is not None else None
         maps.append(ReceiverMap(np.asarray(images[f"receiver{i}/{layer}"]),
-                                receiver.extent, variance))
+                                receiver.extent, variance, seed_maps=seeds))
     return maps
 
 
@@ -109,7 +111,7 @@ def _unchanged(scene: Scene, method: Method, scenes_dir: Path) -> bool:
 def comparison_checks(scene: Scene, method: Method, *, geometry: SceneGeometry,
                       images: dict[str, np.ndarray], stability: dict | None,
                       status_counts: dict | None, files: CheckFiles, scenes_dir: Path,
-                      golden_dir: Path, metrics=(), ctx=None) -> Checked:
+                      golden_dir: Path, metrics=(), seed_maps=None, ctx=None) -> Checked:
     """All checks of one comparison (module docstring).
 
     Parameters
@@ -130,6 +132,9 @@ def comparison_checks(scene: Scene, method: Method, *, geometry: SceneGeometry,
         The caustics-mapping per-status vertex counts (method targets on them).
     files : CheckFiles
         Locks, targets and gaps.
+    seed_maps : sequence of ndarray (K, H, W, 3) or None, optional
+        The reference's per-seed maps per receiver: *flux agreement*'s interval comes
+        from their totals' spread (:func:`harness.checks.physical.seed_flux_interval`).
     metrics : sequence of MetricValue
         The comparison's records: the method targets on relMSE quote (and are judged
         from the interval of) its ``receiver0 / caustic / relmse`` record.
@@ -137,7 +142,7 @@ def comparison_checks(scene: Scene, method: Method, *, geometry: SceneGeometry,
         The committed scenes and the golden references.
     """
     method_maps = _maps(images, geometry, "method")
-    reference_maps = _maps(images, geometry, "reference")
+    reference_maps = _maps(images, geometry, "reference", seed_maps)
     not_applied = {}
     checks = []
     stability = stability or {}

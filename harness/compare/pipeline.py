@@ -231,7 +231,9 @@ def run_comparison(scene: Scene, method: Method, *,
                                     stability=stability,
                                     status_counts=render.result.metadata.get("status_counts"),
                                     files=checks.files, scenes_dir=checks.scenes_dir,
-                                    golden_dir=checks.golden_dir, metrics=scored.metrics)
+                                    golden_dir=checks.golden_dir, metrics=scored.metrics,
+                                    seed_maps=[m.seed_maps for m in
+                                               references.reference.receivers])
         found, not_applied = checked.checks, checked.not_applied
     table = cross = None
     if crosscheck is not None:
