@@ -79,7 +79,6 @@ KEY_METRICS = (
     ("receiver0", "full", "flux_ratio"),
     ("receiver0", "outside", "stray_flux"),
     ("camera", "object", "relmse"),
-    ("camera", "object_masked", "flip"),
 )
 REGION_ORDER = ("full", "caustic", "outside", "object", "object_masked")
 #: A page shows its flux budget when the method's flux ratio (receiver 0, whole map)

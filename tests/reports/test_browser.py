@@ -235,10 +235,16 @@ def test_canvas_tone_map_matches_the_metrics_tone_map(browser, reports, comparis
 
 @pytest.mark.parametrize("mode", ["linked", "embedded"])
 def test_summary_page_in_chromium(browser, reports, mode):
-    """The index decodes its thumbnails and links to a scene page that opens."""
+    """The index decodes its thumbnails, fits the 1400 px window without scrolling
+    sideways (the page and its summary table's own scroller), and links to a scene
+    page that opens."""
     page, log = _open(browser, reports[mode] / "index.html")
     _assert_images_decode(page)
     assert page.locator("table.summary tbody tr").count() == 2
+    widths = page.evaluate("""() => { const t = document.querySelector('table.summary');
+        return [document.documentElement.scrollWidth, t.scrollWidth,
+                t.closest('.table-wrap').clientWidth]; }""")
+    assert widths[0] <= 1400 and widths[1] <= widths[2], widths
     ARTIFACTS.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS / f"report-index-{mode}.png"), full_page=True)
     page.locator("a.scene-link").first.click()
