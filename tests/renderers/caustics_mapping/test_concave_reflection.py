@@ -1,0 +1,102 @@
+"""The concave reflectors' hard cases (``scenes/hard/concave``): a polished
+hemispherical bowl (deep) and a spherical cap of half its depth (shallow) under suns
+15 to 75 deg high, and a half-pipe under a 20 deg sun; the reference counts one chain,
+``L R D`` (objects[0]). Physical requirements on the strong preset, per member:
+
+* flux agreement: the receiver-map flux / a fresh photon-traced reference's, per RGB
+  channel, within ``FLUX_TOLERANCE`` (2 %) + 4 standard errors of the reference's total
+  (as ``test_reflection_flux.py``, the same grid of 128, small maps, 4 seeds of 2^20
+  photons);
+* the estimator found the receiver: the share of the traced flux whose search ended
+  without a verified hit while its exact ray meets a receiver first
+  (``estimator_failed_flux_fraction`` of ``harness.checks.stability.search_outcomes``)
+  is at most 1 % (the bound the budget's "estimator failed" row is held to).
+
+A member that misses either today is a known gap (a strict xfail: it fails once the gap
+closes, until the entry goes), with its measured numbers (llvmpipe, these settings)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from harness.checks.physical import FLUX_TOLERANCE, flux_standard_error
+from harness.checks.stability import search_outcomes
+from renderers.caustics_mapping import render_frame
+from renderers.mitsuba.reference import estimate_receivers
+from scenes.geometry import build_geometry
+
+from .conftest import ROOT, small_scene
+
+pytestmark = pytest.mark.physical_requirement
+
+CONCAVE = ROOT / "scenes" / "hard" / "concave"
+#: Photons per seed of the reference: one whole launch (relative standard error of the
+#: total ~0.1 % where the floor's caustic is not small).
+PHOTONS = 1 << 20
+#: Largest share of the traced flux the estimator may leave unfound while its exact
+#: ray meets a receiver: 1 %, half the flux agreement's 2 % tolerance.
+FAILED_BOUND = 0.01
+
+#: Members missing a requirement today: what is wrong, measured (flux ratio, G channel;
+#: estimator-failed share of the traced flux).
+GAPS = {
+    "bowl_deep_sun60": "flux 1.042: verified hits whose exact ray meets the bowl (its far "
+                       "inside's reflections crossing a side wall the light sees edge-on); "
+                       "1.020 without the reflected search",
+    "bowl_deep_sun75": "flux 1.164, the same leak, from the estimator's own verified hits "
+                       "(1.150 without the reflected search)",
+    "bowl_shallow_sun45": "flux 1.108: the estimator's verified hits whose exact ray meets "
+                          "the cap again (unchanged by the reflected search)",
+    "bowl_shallow_sun60": "the reference puts almost nothing on the floor; the method's "
+                          "verified hits that meet the cap again do (ratio ~985)",
+    "bowl_shallow_sun75": "the reference puts nothing on the floor; the method's verified "
+                          "hits that meet the cap again do (flux ratio infinite)",
+    "halfpipe_sun20": "flux 0.971, estimator failed 1.4 %: reflected rays from the inside "
+                      "that leave through the open ends pass behind surfaces the light "
+                      "sees, which the reflected search's stays-in-front test refuses "
+                      "(0.093 and 41 % before the reflected search)",
+}
+#: The issue's scene (30 deg) runs by default; the rest of the family is slow.
+DEFAULT = {"bowl_deep_sun30"}
+MEMBERS = sorted(p.stem for p in CONCAVE.glob("*.toml"))
+
+
+def _param(name):
+    marks = []
+    if name in GAPS:
+        marks.append(pytest.mark.xfail(strict=True, reason=GAPS[name]))
+    if name not in DEFAULT:
+        marks.append(pytest.mark.slow)
+    return pytest.param(name, marks=marks, id=name)
+
+
+def test_the_family_is_what_the_docs_list():
+    """Regression lock: 5 elevations x 2 depths of bowl and one half-pipe."""
+    assert len(MEMBERS) == 11 and set(GAPS) <= set(MEMBERS)
+
+
+@pytest.mark.parametrize("name", [_param(n) for n in MEMBERS])
+def test_strong_finds_the_concave_reflection(context_factory, name):
+    """Physical requirements: flux agreement per channel and the estimator-failed share
+    at most 1 % (before the reflected search the 30 deg deep bowl was at flux 0.47,
+    estimator failed 17.5 %)."""
+    scene = small_scene(CONCAVE / f"{name}.toml", preset="strong", grid=128,
+                        caustic_map=256, positions_map=256, receiver_map=[128, 128], seeds=4)
+    geometry = build_geometry(scene)
+    frame = render_frame(scene, ctx=context_factory(), geometry=geometry)
+    failed = search_outcomes(scene, geometry, frame.traced_records())[
+        "estimator_failed_flux_fraction"]
+    method = sum(m.total_flux() for m in frame.result.receivers)
+    reference = estimate_receivers(scene, photons=PHOTONS, seeds=4, time_cap=1e-3,
+                                   caustic_only=True)
+    expected = sum(m.total_flux() for m in reference.caustic)
+    # |method - reference| within (2 % + 4 standard errors) of the reference's total; a
+    # channel the reference leaves dark (the shallow bowl under a high sun) allows none.
+    lit = expected > 0
+    bound = np.where(lit, FLUX_TOLERANCE + 4 * np.where(
+        lit, flux_standard_error(reference.caustic), 0.0), 0.0) * expected
+    assert failed <= FAILED_BOUND, f"estimator failed on {failed:.4f} of the traced flux"
+    assert np.all(np.abs(method - expected) <= bound), (
+        f"flux {np.round(method, 4)} W against the reference's {np.round(expected, 4)} W "
+        f"(R, G, B), allowed difference {np.round(bound, 4)} W")
