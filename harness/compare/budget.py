@@ -8,10 +8,10 @@ receiver (``off_receiver_flux_fraction``) and sorts the vertices left without a
 verified hit (lost, unconverged, diverged) by their exact rays
 (:func:`harness.checks.stability.search_outcomes`): the light leaves the scene, meets
 an object again (a chain the method does not model), or the estimator failed (a
-receiver is on the ray: the one share a physical requirement bounds). With the flux on the receiver maps, of
-the method and of the reference, this says why a flux ratio is far from 1: light
-lost to total internal reflection, held back unconverged, splatted where no
-receiver is, or never emitted (a dark light).
+receiver is on the ray: the one share a physical requirement bounds). With the flux
+on the receiver maps, of the method and of the reference, this says why a flux ratio
+is far from 1: light lost to total internal reflection, held back unconverged,
+splatted where no receiver is, or never emitted (a dark light).
 
 Budgets of both sides (:func:`method_budget`, :func:`reference_budget_table`), in
 watts per RGB channel, each as a :class:`Table` of :data:`SIDE_COLUMNS` whose rows
