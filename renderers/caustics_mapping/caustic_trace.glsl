@@ -496,20 +496,28 @@ bool reflected_search(vec3 v, vec3 r, out float d) {
 }
 
 // Whether the ray v + s r, s in (0, d], stays in front of every object surface the
-// light sees (u_front_positions, nearest texel): no sample farther from the light
-// than the front surface seen through its texel by more than 2 texel widths w at it
-// (samples within 2 w of v skipped, as reflection_blocked's). A stricter test than
-// reflection_blocked, for the hits of reflected_search only: those rays run back
-// towards the light, and where one crosses a sheet that the light sees edge-on (a
-// bowl's side wall, from its far inside wall) neither image shows the crossing, so
-// reflection_blocked let them through (bowl_sun: flux ratio 1.05 with them). A ray
-// that passes behind a surface the light sees without meeting it (under a bowl's rim
-// seen from the light) fails the test too and stays unconverged: measured in the
-// flux budget's "estimator failed" share.
-bool stays_in_front(vec3 v, vec3 r, float d) {
+// light sees (u_front_positions, nearest texel), as far as that image shows: no
+// sample farther from the light than the front surface f seen through its texel by
+// more than that surface's depth spread over half a texel plus a quarter texel,
+// w (0.5 tan(theta) + 0.25) with w the texel width at the sample and theta the angle
+// between the surface normal and the light (tan capped at 10). The samples,
+// FRONT_STEPS of them, cover only the part of the ray inside the object's bounding
+// box grown by a texel (past it no surface of the object is seen: reentry_samples'
+// argument), those within 2 w of v skipped (the ray still leaves its own sheet's
+// rounded depths). A stricter test than reflection_blocked, for the hits of
+// reflected_search only: those rays run back towards the light, and where one
+// crosses a sheet that the light sees edge-on (a bowl's side wall, from its far inside
+// wall) neither image shows the crossing, so reflection_blocked let them through
+// (bowl_sun: flux ratio 1.05 with them). A ray that passes behind a surface the light
+// sees without meeting it (under a bowl's rim seen from the light) fails the test too
+// and stays unconverged: measured in the flux budget's "estimator failed" share.
+const int FRONT_STEPS = 96;
+bool stays_in_front(vec3 v, vec3 r, float d, int object) {
     float view = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z);
-    float step = d / float(REENTRY_STEPS);
-    for (int k = 1; k <= REENTRY_STEPS; ++k) {
+    float len = min(d, float(reentry_samples(v, r, object, d, view)) / float(REENTRY_STEPS) * d
+                       + d / float(REENTRY_STEPS));
+    float step = len / float(FRONT_STEPS);
+    for (int k = 1; k <= FRONT_STEPS; ++k) {
         vec3 x = v + (step * float(k)) * r;
         float w = view / float(u_grid) * (u_obj_persp == 1 ? length(x - u_light_pos) : 1.0);
         if (step * float(k) < 2.0 * w) continue;
@@ -521,7 +529,9 @@ bool stays_in_front(vec3 v, vec3 r, float d) {
                                         ivec2(u_grid - 1)), u_grid, u_front_stride);
         vec4 f = texelFetch(u_front_positions, t, 0);
         if (f.w < 0.5) continue;
-        if (light_distance(x) > light_distance(f.xyz) + 2.0 * w) return false;
+        float c = abs(dot(texelFetch(u_front_normals, t, 0).xyz, incident_dir(x)));
+        float slope = min(sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-3), 10.0);
+        if (light_distance(x) > light_distance(f.xyz) + w * (0.5 * slope + 0.25)) return false;
     }
     return true;
 }
@@ -704,7 +714,7 @@ void main() {
             float receiver2;
             vec3 normal2;
             int status2 = verify_hit(v, r, n, d2, material, object, receiver2, normal2);
-            if (status2 == STATUS_HIT && !stays_in_front(v, r, d2)) status2 = STATUS_UNCONVERGED;
+            if (status2 == STATUS_HIT && !stays_in_front(v, r, d2, object)) status2 = STATUS_UNCONVERGED;
             if (status2 != STATUS_UNCONVERGED) {
                 d = d2;
                 p = v + d * r;
