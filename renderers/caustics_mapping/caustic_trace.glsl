@@ -441,6 +441,7 @@ bool reflection_blocked(vec3 v, vec3 r, float d, int object, bool edge) {
 const int REFLECTED_MARCH = 4;
 const int REFLECTED_STEPS = 8;
 uniform int u_reflected_search;     // 1: reflected_search() after an unverified estimate
+uniform int u_facet_test;           // 1: a reflected ray into its facet ends (facet_normal)
 
 bool depth_gap(vec3 x, out float sigma) {
     vec4 t;
@@ -580,6 +581,31 @@ int verify_hit(vec3 v, vec3 r, vec3 n, float d, int material, int object,
     return status;
 }
 
+// The facet normal at front-atlas texel `a` of `object` (unit, facing the light along
+// l), from the positions of its neighbours along each atlas axis: the one-sided
+// difference to the neighbour of the same object whose position is nearer (a texel's
+// rasterised point lies on the facet the light sees there, so two neighbours on the
+// same facet give its plane exactly). False where no neighbour along an axis shows the
+// object.
+bool facet_normal(ivec2 a, int object, vec3 p, vec3 l, out vec3 m) {
+    m = vec3(0.0);
+    vec3 e[2];
+    for (int axis = 0; axis < 2; ++axis) {
+        ivec2 step = axis == 0 ? ivec2(1, 0) : ivec2(0, 1);
+        vec4 q1 = texelFetch(u_front_positions, a + step, 0);
+        vec4 q0 = texelFetch(u_front_positions, a - step, 0);
+        bool ok1 = abs(q1.w - float(object + 1)) < 0.5, ok0 = abs(q0.w - float(object + 1)) < 0.5;
+        if (!ok1 && !ok0) return false;
+        vec3 d1 = q1.xyz - p, d0 = p - q0.xyz;
+        e[axis] = ok1 && (!ok0 || dot(d1, d1) <= dot(d0, d0)) ? d1 : d0;
+    }
+    vec3 c = cross(e[0], e[1]);
+    if (!(dot(c, c) > 0.0)) return false;
+    m = normalize(c);
+    if (dot(m, l) > 0.0) m = -m;
+    return true;
+}
+
 void write_record(int base, vec3 v, float view, vec3 r, float d, vec3 p, int status,
                   vec3 flux, float receiver, vec3 normal) {
     records[base + 0] = vec4(v, view);
@@ -661,9 +687,19 @@ void main() {
 
     vec3 r;
     float inside = 0.0;                         // path length in the medium (m)
+    // A reflected ray that points into the facet it leaves (the shading normal n tilts
+    // from the facet's, most at a silhouette where the light grazes the surface) meets
+    // the object again at once, within a texel, where no image shows it: the chain
+    // L R D ends there (STATUS_REENTERED, below), as the reference's does (its photons
+    // reflect about the same shading normals and meet the facets).
+    bool into_facet = false;
     if (material == 3) {
         r = reflect(l, n);
         flux *= u_reflectance[object];
+        vec3 m;
+        if (u_facet_test == 1 && u_verify == 1 && u_convex[object] == 0
+            && facet_normal(a, object, v, l, m))
+            into_facet = dot(r, m) < 0.0;
     } else {
         r = refract(l, n, 1.0 / ior);
         if (fresnel) flux *= fresnel_transmittance(-dot(l, n), 1.0, ior);
@@ -708,13 +744,15 @@ void main() {
     // A reflected ray left unverified gets the signed-depth search (reflected_search);
     // its estimate replaces the first only where it is verified, so every vertex the
     // estimator verified keeps its record bit for bit.
-    if (u_reflected_search == 1 && material == 3 && status == STATUS_UNCONVERGED) {
+    if (u_reflected_search == 1 && material == 3 && status == STATUS_UNCONVERGED
+        && !into_facet) {
         float d2;
         if (reflected_search(v, r, d2)) {
             float receiver2;
             vec3 normal2;
             int status2 = verify_hit(v, r, n, d2, material, object, receiver2, normal2);
-            if (status2 == STATUS_HIT && !stays_in_front(v, r, d2, object)) status2 = STATUS_UNCONVERGED;
+            if (status2 == STATUS_HIT && !stays_in_front(v, r, d2, object))
+                status2 = STATUS_UNCONVERGED;
             if (status2 != STATUS_UNCONVERGED) {
                 d = d2;
                 p = v + d * r;
@@ -724,6 +762,9 @@ void main() {
             }
         }
     }
+    // A verified hit of a ray into its own facet meets the object first: the estimate
+    // is kept in the record, the chain ends.
+    if (into_facet && status == STATUS_HIT) status = STATUS_REENTERED;
     // Eq. 7 for a water surface: attenuation from the surface to the receiver.
     if (material == 2) flux *= exp(-u_absorption[object] * max(d, 0.0));
     write_record(base, v, float(view), r, d, p, status, flux, receiver, normal);
