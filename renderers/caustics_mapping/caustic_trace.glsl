@@ -441,7 +441,7 @@ bool reflection_blocked(vec3 v, vec3 r, float d, int object, bool edge) {
 const int REFLECTED_MARCH = 4;
 const int REFLECTED_STEPS = 8;
 uniform int u_reflected_search;     // 1: reflected_search() after an unverified estimate
-uniform int u_facet_test;           // 1: a reflected ray into its facet ends (facet_normal)
+uniform int u_contact_test;         // 1: a reflected hit under a contact ends (under_contact)
 
 bool depth_gap(vec3 x, out float sigma) {
     vec4 t;
@@ -537,6 +537,34 @@ bool stays_in_front(vec3 v, vec3 r, float d, int object) {
     return true;
 }
 
+// Whether the hit p on a receiver of normal `normal` lies where `object` rests on the
+// receiver: the front atlas (nearest texel, the grid's resolution) shows the object
+// at p's texel, its surface within 30 deg of parallel to the receiver, and the
+// surface's tangent plane there meets the light ray through p within a quarter texel
+// width w of p (the plane carries the texel centre's point over to p's own light ray,
+// exactly on a flat facet). Light cannot reach such a point but through the object: a
+// bowl's bottom on the floor, where reflections off the inside meet the bowl within
+// millimetres of the floor, closer than the object images resolve (reflection_blocked
+// sees no crossing there).
+bool under_contact(vec3 p, vec3 normal, int object) {
+    int face = u_obj_cube == 1 ? cube_face(p - u_light_pos) : 0;
+    vec2 ndc;
+    if (!project(u_obj_vp[face], p, ndc) || any(greaterThan(abs(ndc), vec2(1.0)))) return false;
+    ivec2 t = atlas_texel(face, min(ivec2(floor((ndc * 0.5 + 0.5) * float(u_grid))),
+                                    ivec2(u_grid - 1)), u_grid, u_front_stride);
+    vec4 f = texelFetch(u_front_positions, t, 0);
+    if (abs(f.w - float(object + 1)) >= 0.5) return false;
+    vec3 m = texelFetch(u_front_normals, t, 0).xyz;
+    if (abs(dot(m, normal)) < 0.866) return false;
+    vec3 l = incident_dir(p);
+    float c = dot(l, m);
+    if (abs(c) < 1e-3) return false;
+    float gap = dot(p - f.xyz, m) / c;        // from the plane to p along the light ray (m)
+    float view = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z);
+    float w = view / float(u_grid) * (u_obj_persp == 1 ? length(p - u_light_pos) : 1.0);
+    return abs(gap) <= 0.25 * w;
+}
+
 // The status of the estimate d on the ray v + d r (n: the surface normal at v, facing
 // the light): STATUS_HIT, or with verified hits STATUS_UNCONVERGED or
 // STATUS_REENTERED; without, STATUS_LOST where no receiver is seen at the estimate.
@@ -571,6 +599,9 @@ int verify_hit(vec3 v, vec3 r, vec3 n, float d, int material, int object,
         // short of it within the tolerance: a ray that meets the object within a
         // texel of the receiver (bowl_sun's bottom, 1.3 % of its flux, all in one
         // spot under the bowl) crosses it only there.
+        else if (material == 3 && u_convex[object] == 0 && u_contact_test == 1
+                 && under_contact(p, normal, object))
+            status = STATUS_REENTERED;
         else if (material == 3 && u_convex[object] == 0
                  && reflection_blocked(v, r, max(d, dot(t.xyz - v, normal) / dot(r, normal)),
                                        object, abs(dot(r, n)) > GRAZING))
@@ -579,31 +610,6 @@ int verify_hit(vec3 v, vec3 r, vec3 n, float d, int material, int object,
         status = STATUS_LOST;
     }
     return status;
-}
-
-// The facet normal at front-atlas texel `a` of `object` (unit, facing the light along
-// l), from the positions of its neighbours along each atlas axis: the one-sided
-// difference to the neighbour of the same object whose position is nearer (a texel's
-// rasterised point lies on the facet the light sees there, so two neighbours on the
-// same facet give its plane exactly). False where no neighbour along an axis shows the
-// object.
-bool facet_normal(ivec2 a, int object, vec3 p, vec3 l, out vec3 m) {
-    m = vec3(0.0);
-    vec3 e[2];
-    for (int axis = 0; axis < 2; ++axis) {
-        ivec2 step = axis == 0 ? ivec2(1, 0) : ivec2(0, 1);
-        vec4 q1 = texelFetch(u_front_positions, a + step, 0);
-        vec4 q0 = texelFetch(u_front_positions, a - step, 0);
-        bool ok1 = abs(q1.w - float(object + 1)) < 0.5, ok0 = abs(q0.w - float(object + 1)) < 0.5;
-        if (!ok1 && !ok0) return false;
-        vec3 d1 = q1.xyz - p, d0 = p - q0.xyz;
-        e[axis] = ok1 && (!ok0 || dot(d1, d1) <= dot(d0, d0)) ? d1 : d0;
-    }
-    vec3 c = cross(e[0], e[1]);
-    if (!(dot(c, c) > 0.0)) return false;
-    m = normalize(c);
-    if (dot(m, l) > 0.0) m = -m;
-    return true;
 }
 
 void write_record(int base, vec3 v, float view, vec3 r, float d, vec3 p, int status,
@@ -687,19 +693,9 @@ void main() {
 
     vec3 r;
     float inside = 0.0;                         // path length in the medium (m)
-    // A reflected ray that points into the facet it leaves (the shading normal n tilts
-    // from the facet's, most at a silhouette where the light grazes the surface) meets
-    // the object again at once, within a texel, where no image shows it: the chain
-    // L R D ends there (STATUS_REENTERED, below), as the reference's does (its photons
-    // reflect about the same shading normals and meet the facets).
-    bool into_facet = false;
     if (material == 3) {
         r = reflect(l, n);
         flux *= u_reflectance[object];
-        vec3 m;
-        if (u_facet_test == 1 && u_verify == 1 && u_convex[object] == 0
-            && facet_normal(a, object, v, l, m))
-            into_facet = dot(r, m) < 0.0;
     } else {
         r = refract(l, n, 1.0 / ior);
         if (fresnel) flux *= fresnel_transmittance(-dot(l, n), 1.0, ior);
@@ -744,8 +740,7 @@ void main() {
     // A reflected ray left unverified gets the signed-depth search (reflected_search);
     // its estimate replaces the first only where it is verified, so every vertex the
     // estimator verified keeps its record bit for bit.
-    if (u_reflected_search == 1 && material == 3 && status == STATUS_UNCONVERGED
-        && !into_facet) {
+    if (u_reflected_search == 1 && material == 3 && status == STATUS_UNCONVERGED) {
         float d2;
         if (reflected_search(v, r, d2)) {
             float receiver2;
@@ -762,9 +757,6 @@ void main() {
             }
         }
     }
-    // A verified hit of a ray into its own facet meets the object first: the estimate
-    // is kept in the record, the chain ends.
-    if (into_facet && status == STATUS_HIT) status = STATUS_REENTERED;
     // Eq. 7 for a water surface: attenuation from the surface to the receiver.
     if (material == 2) flux *= exp(-u_absorption[object] * max(d, 0.0));
     write_record(base, v, float(view), r, d, p, status, flux, receiver, normal);

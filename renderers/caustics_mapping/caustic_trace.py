@@ -69,11 +69,9 @@ class TraceOptions:
         signed depth along the light from the tangent plane of the receiver seen
         through its origin (``reflected_search`` in ``caustic_trace.glsl``); on with
         verified hits.
-    facet_test : bool
-        A reflected ray that points into the facet it leaves (the facet's normal from
-        the front atlas's neighbouring positions, ``facet_normal`` in
-        ``caustic_trace.glsl``) ends there as ``reentered``, on objects that are not
-        convex bodies; on with verified hits.
+    contact_test : bool
+        A reflected hit where the object rests on the receiver (``under_contact`` in
+        ``caustic_trace.glsl``) ends as ``reentered``; on with verified hits.
     """
 
     estimator: str
@@ -88,7 +86,7 @@ class TraceOptions:
     exit_iterations: int = 8
     converged: float = 0.0
     reflected_search: bool = False
-    facet_test: bool = False
+    contact_test: bool = False
 
 
 #: Residual |h| (positions-map texels at the estimate) at which the safeguarded
@@ -108,7 +106,7 @@ def trace_options(settings, eps: float) -> TraceOptions:
         start_distance=settings.start_distance, verify=bool(settings.verify_hits),
         hit_tolerance=settings.hit_tolerance,
         converged=CONVERGED if settings.safeguarded else 0.0,
-        reflected_search=bool(settings.verify_hits), facet_test=bool(settings.verify_hits))
+        reflected_search=bool(settings.verify_hits), contact_test=bool(settings.verify_hits))
 #: Largest number of caustic objects one render handles.
 MAX_OBJECTS = 8
 RECORD_FLOATS = 20
@@ -301,7 +299,7 @@ def run_caustic_trace(
         ("u_converged", float(options.converged)), ("u_has_far", int(far is not None)),
         ("u_front_stride", front_stride), ("u_patches", int(patches is not None)),
         ("u_reflected_search", int(options.reflected_search)),
-        ("u_facet_test", int(options.facet_test)),
+        ("u_contact_test", int(options.contact_test)),
     ):
         set_uniform(program, name, value)
     records.bind_to_storage_buffer(0)
