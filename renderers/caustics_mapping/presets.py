@@ -11,8 +11,11 @@ A setting the scene file or the command line gives always wins; a setting left a
 * ``strong``: the best known implementation: bilinear lookups within one surface
   with renormalised normals, the exit surface at 4x the grid's resolution (2x where
   every closed dielectric bounds a convex body: see :func:`resolve_scene`), verified
-  hits, a tight rectangular object frustum, the safeguarded secant estimator with 5
-  iterations (verified hits drop what has not converged: on glass_sphere the
+  hits (a reflected ray they leave unverified searched again on the signed depth
+  along the light, and a reflected hit where the object rests on the receiver
+  dropped: ``caustic_trace.TraceOptions``), a tight rectangular object frustum, the
+  safeguarded secant estimator with 5 iterations (verified hits drop what has not
+  converged: on glass_sphere the
   modified estimator leaves 17 % of the flux unconverged after 3 iterations and
   3.2 % after 8; the secant 0.05 % after 5) and triangle splats (flux / area between
   neighbouring hits; Ernst et al. 2005, webgl-water), which measured better than
