@@ -20,7 +20,7 @@ A setting the scene file or the command line gives always wins; a setting left a
   triangle splats (flux / area between neighbouring hits; Ernst et al. 2005,
   webgl-water), which measured better than footprint Gaussians (caustic relMSE
   0.0009 against 0.0019 on glass_sphere), with rim patches of 3 x 3 (the quads at
-  the silhouette traced again, finer: whole- receiver excess relMSE on glass_sphere
+  the silhouette traced again, finer: whole-receiver excess relMSE on glass_sphere
   5.6e-4 -> 2.4e-4, metal_ring's caustic region 1.3e-2 -> 2.2e-3; docs/method.md).
 """
 
