@@ -75,6 +75,12 @@ UNFOUND = ("lost", "unconverged", "diverged")
 #: its direction from the record's origin, which lies on the surface it leaves (in
 #: float32): without it a ray may meet its own surface at distance ~0.
 _SPAWN = 1e-5
+#: An object met closer than this (m, per metre of the receivers' extent) to the origin
+#: is the origin's own surface, and the ray is cast again from past it (twice at most):
+#: the method's origins are image-space points that can lie just inside the mesh
+#: (glass_sphere's exit points at radius 0.9998 met the icosphere's facets within
+#: 0.8 mm: 0.83 % of its traced flux read "meets an object" without this).
+_OWN_SURFACE = 1e-3
 
 
 def search_outcomes(scene: Scene, geometry: SceneGeometry,
@@ -87,7 +93,9 @@ def search_outcomes(scene: Scene, geometry: SceneGeometry,
     * ``leaves_scene_flux_fraction``: the ray meets nothing: the light leaves the
       scene off every receiver (physics: the reference does not count it either);
     * ``meets_object_flux_fraction``: it meets a caustic object first, a chain
-      longer than the method models (the reference does not count it);
+      longer than the method models (the reference does not count it); an object
+      met within ``_OWN_SURFACE`` of the scene's extent is taken for the origin's own
+      surface, and the ray goes on past it;
     * ``estimator_failed_flux_fraction``: it meets a receiver first: a hit the
       method should have found and did not (the share a physical requirement bounds).
 
@@ -109,7 +117,21 @@ def search_outcomes(scene: Scene, geometry: SceneGeometry,
     direction = direction / np.linalg.norm(direction, axis=1, keepdims=True)
     extent = max((float(np.max(np.abs(g.mesh.positions))) for g in geometry.receivers),
                  default=1.0)
-    exact = SurfaceTracer(scene, geometry)(origin + _SPAWN * extent * direction, direction)
+    tracer = SurfaceTracer(scene, geometry)
+    start = origin + _SPAWN * extent * direction
+    exact = tracer(start, direction)
+    travelled = np.zeros(len(start))
+    for _ in range(2):
+        own = (exact.kind == SurfaceTracer.OBJECT) & (
+            travelled + exact.distance < _OWN_SURFACE * extent)
+        if not own.any():
+            break
+        step = np.where(own, exact.distance + _SPAWN * extent, 0.0)
+        travelled += step
+        start = start + step[:, None] * direction
+        again = tracer(start[own], direction[own])
+        for field in ("kind", "distance"):
+            getattr(exact, field)[own] = getattr(again, field)
     flux = per_vertex[unfound]
     for key, kind in (("leaves_scene_flux_fraction", SurfaceTracer.NONE),
                       ("meets_object_flux_fraction", SurfaceTracer.OBJECT),

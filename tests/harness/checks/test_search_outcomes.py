@@ -65,3 +65,19 @@ def test_method_budget_shows_the_three_fates_apart(bowl):
     for key, short, _ in SEARCH_ROWS:
         assert rows[short]["fraction"] == pytest.approx(stability[key])
         assert rows[short]["flux_w"] == pytest.approx(45.0 * stability[key])
+
+
+def test_an_origin_just_inside_its_own_surface_is_not_a_second_meeting(bowl):
+    """Regression lock (known answer): an unconverged vertex 0.1 mm inside the bowl's
+    wall (radius 0.9999 about the sphere's centre (0, 0, 1), 45 deg below the rim),
+    its ray radial and outwards, meets the wall at once and then the floor at
+    x = 1: its flux is the estimator's failure, not a second meeting with the bowl."""
+    scene, geometry = bowl
+    s = np.sqrt(0.5)
+    hits = {"status": np.array([STATUS["unconverged"]]),
+            "origin": np.array([[0.997 * s, 0.0, 1.0 - 0.997 * s]]),
+            "direction": np.array([[s, 0.0, -s]]), "flux": np.ones((1, 3)),
+            "receiver": np.array([-1])}
+    shares = search_outcomes(scene, geometry, hits)
+    assert shares["estimator_failed_flux_fraction"] == pytest.approx(1.0)
+    assert shares["meets_object_flux_fraction"] == 0.0
