@@ -29,8 +29,9 @@ def test_the_committed_meshes_are_the_script_s_output(tmp_path, monkeypatch):
 
 
 def test_the_meshes_lie_on_their_surfaces():
-    """Physical requirement: distances to the stated surfaces within the files' 6-decimal rounding (1e-6 m
-    per coordinate, so at most sqrt(3) × 5e-7 m off the surface)."""
+    """Physical requirement: distances to the stated surfaces within the files'
+    6-decimal rounding (5e-7 m per coordinate, so at most sqrt(3) × 5e-7 m off the
+    surface; bound 1e-6 m)."""
     cap = _vertices(MESHES / "bowl_shallow.obj")
     centre = np.array([0.0, 0.0, 1.25 - 0.5])
     assert np.abs(np.linalg.norm(cap - centre, axis=1) - 1.25).max() < 1e-6
