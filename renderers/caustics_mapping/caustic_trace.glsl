@@ -14,7 +14,9 @@
 //   4: xyz receiver normal at the hit, w 0
 // History (binding 1): u_iterations + 1 floats per vertex, the estimate after
 // 0, 1, ..., u_iterations updates (entry 0 is the start d_1 = g(0)); after a
-// lost lookup or a divergence the last estimate is repeated.
+// lost lookup or a divergence the last estimate is repeated. A reflected vertex whose
+// estimate reflected_search() replaced keeps the estimator's history; its record holds
+// the search's d.
 //
 // The estimators (estimators.glsl) find where the ray v + d r meets the receivers
 // in the receiver positions atlas: T(x), the receiver position at x's light-space
@@ -595,13 +597,14 @@ int verify_hit(vec3 v, vec3 r, vec3 n, float d, int material, int object,
         // within a texel of the floor, reflecting upwards: 1.4 % of its flux).
         else if (material == 3 && dot(r, normal) * dot(v - t.xyz, normal) >= 0.0)
             status = STATUS_UNCONVERGED;
+        // A hit where the object rests on the receiver is reached only through it.
+        else if (material == 3 && u_convex[object] == 0 && u_contact_test == 1
+                 && under_contact(p, normal, object))
+            status = STATUS_REENTERED;
         // Sampled up to the receiver's tangent plane at T(P), past P where P stops
         // short of it within the tolerance: a ray that meets the object within a
         // texel of the receiver (bowl_sun's bottom, 1.3 % of its flux, all in one
         // spot under the bowl) crosses it only there.
-        else if (material == 3 && u_convex[object] == 0 && u_contact_test == 1
-                 && under_contact(p, normal, object))
-            status = STATUS_REENTERED;
         else if (material == 3 && u_convex[object] == 0
                  && reflection_blocked(v, r, max(d, dot(t.xyz - v, normal) / dot(r, normal)),
                                        object, abs(dot(r, n)) > GRAZING))
