@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.raycast import ReceiverTracer
+from harness.raycast import ReceiverTracer, SurfaceTracer
 from harness.studies.convergence import OUTCOMES, classify, texel_footprint
 from renderers.caustics_mapping.caustic_trace import STATUS
 from renderers.caustics_mapping.lights import light_setups
@@ -24,8 +24,8 @@ from renderers.results import RenderResult
 from scenes.geometry import SceneGeometry
 from scenes.model import DirectionalLight, Scene, WaterSurface
 
-__all__ = ["convergence_outcomes", "estimate_outcomes", "incident_flux_bound", "off_receiver_flux",
-           "stability_summary"]
+__all__ = ["UNFOUND", "convergence_outcomes", "estimate_outcomes", "incident_flux_bound",
+           "off_receiver_flux", "search_outcomes", "stability_summary"]
 
 
 def incident_flux_bound(scene: Scene, geometry: SceneGeometry) -> np.ndarray:
@@ -69,6 +69,77 @@ def off_receiver_flux(geometry: SceneGeometry, hits: dict[str, np.ndarray]) -> f
     return float(per_vertex[splatted][~np.isfinite(exact.distance)].sum()) / traced
 
 
+#: Statuses of a traced vertex whose search ended without a verified hit.
+UNFOUND = ("lost", "unconverged", "diverged")
+#: The exact ray starts this far (m, per metre of the scene's receivers' extent) along
+#: its direction from the record's origin, which lies on the surface it leaves (in
+#: float32): without it a ray may meet its own surface at distance ~0.
+_SPAWN = 1e-5
+#: An object met closer than this (m, per metre of the receivers' extent) to the origin
+#: is the origin's own surface, and the ray is cast again from past it (twice at most):
+#: the method's origins are image-space points that can lie just inside the mesh
+#: (glass_sphere's exit points at radius 0.9998 met the icosphere's facets within
+#: 0.8 mm: 0.83 % of its traced flux read "meets an object" without this).
+_OWN_SURFACE = 1e-3
+
+
+def search_outcomes(scene: Scene, geometry: SceneGeometry,
+                    hits: dict[str, np.ndarray]) -> dict[str, float]:
+    """What became of the traced flux whose search ended without a verified hit
+    (statuses :data:`UNFOUND`), by the exact ray from each such record's origin
+    along its direction (Mitsuba's ray tracing on the scene's own triangles, the
+    objects included):
+
+    * ``leaves_scene_flux_fraction``: the ray meets nothing: the light leaves the
+      scene off every receiver (physics: the reference does not count it either);
+    * ``meets_object_flux_fraction``: it meets a caustic object first, a chain
+      longer than the method models (the reference does not count it); an object
+      met within ``_OWN_SURFACE`` of the scene's extent is taken for the origin's own
+      surface, and the ray goes on past it;
+    * ``estimator_failed_flux_fraction``: it meets a receiver first: a hit the
+      method should have found and did not (the share a physical requirement bounds).
+
+    Each is a share of the traced flux (the non-empty vertices', summed over
+    channels; ``hits`` holds every traced vertex at its ``flux`` share, as
+    :meth:`renderers.caustics_mapping.Frame.traced_records` gives them). The three add
+    up to the :data:`UNFOUND` statuses' share.
+    """
+    status = np.asarray(hits["status"]).astype(int)
+    per_vertex = np.asarray(hits["flux"], np.float64).sum(axis=1)
+    traced = float(per_vertex[status != STATUS["empty"]].sum())
+    unfound = np.isin(status, [STATUS[name] for name in UNFOUND])
+    out = {"leaves_scene_flux_fraction": 0.0, "meets_object_flux_fraction": 0.0,
+           "estimator_failed_flux_fraction": 0.0}
+    if traced <= 0 or not unfound.any():
+        return out
+    origin = np.asarray(hits["origin"], np.float64)[unfound]
+    direction = np.asarray(hits["direction"], np.float64)[unfound]
+    direction = direction / np.linalg.norm(direction, axis=1, keepdims=True)
+    extent = max((float(np.max(np.abs(g.mesh.positions))) for g in geometry.receivers),
+                 default=1.0)
+    tracer = SurfaceTracer(scene, geometry)
+    start = origin + _SPAWN * extent * direction
+    exact = tracer(start, direction)
+    travelled = np.zeros(len(start))
+    for _ in range(2):
+        own = (exact.kind == SurfaceTracer.OBJECT) & (
+            travelled + exact.distance < _OWN_SURFACE * extent)
+        if not own.any():
+            break
+        step = np.where(own, exact.distance + _SPAWN * extent, 0.0)
+        travelled += step
+        start = start + step[:, None] * direction
+        again = tracer(start[own], direction[own])
+        for field in ("kind", "distance"):
+            getattr(exact, field)[own] = getattr(again, field)
+    flux = per_vertex[unfound]
+    for key, kind in (("leaves_scene_flux_fraction", SurfaceTracer.NONE),
+                      ("meets_object_flux_fraction", SurfaceTracer.OBJECT),
+                      ("estimator_failed_flux_fraction", SurfaceTracer.RECEIVER)):
+        out[key] = float(flux[exact.kind == kind].sum()) / traced
+    return out
+
+
 def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResult,
                       convergence=None, *, hits: dict[str, np.ndarray] | None = None) -> dict:
     """What the report shows under "Numerical stability" for one render.
@@ -81,7 +152,8 @@ def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResul
     the flux shares ``tir_flux_fraction`` (lost to total internal reflection at the
     exit surface), ``unconverged_flux_fraction`` (held back by verified hits) and,
     given the per-vertex records ``hits``, ``off_receiver_flux_fraction``
-    (:func:`off_receiver_flux`); and, when a convergence table is given, the
+    (:func:`off_receiver_flux`) and the fates of the vertices left without a verified
+    hit (:func:`search_outcomes`); and, when a convergence table is given, the
     safeguarded estimators' outcomes at the most iterations measured (``diverged``
     and ``oscillating`` must be 0).
     """
@@ -104,6 +176,7 @@ def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResul
             summary[f"{status}_flux_fraction"] = float(shares[status])
     if hits is not None:
         summary["off_receiver_flux_fraction"] = off_receiver_flux(geometry, hits)
+        summary |= search_outcomes(scene, geometry, hits)
     if convergence is not None:
         summary |= convergence_outcomes(convergence)
     return summary

@@ -4,10 +4,14 @@ The caustics-mapping renderer traces the light through its vertex grid and recor
 per vertex status, the share of the traced flux (``status_flux_fraction``) and the
 watts of the splatted and lost vertices (``splatted_flux``, ``lost_flux``); the
 stability check adds the share splatted by vertices whose exact ray meets no
-receiver (``off_receiver_flux_fraction``). With the flux on the receiver maps, of
-the method and of the reference, this says why a flux ratio is far from 1: light
-lost to total internal reflection, held back unconverged, splatted where no
-receiver is, or never emitted (a dark light).
+receiver (``off_receiver_flux_fraction``) and sorts the vertices left without a
+verified hit (lost, unconverged, diverged) by their exact rays
+(:func:`harness.checks.stability.search_outcomes`): the light leaves the scene, meets
+an object again (a chain the method does not model), or the estimator failed (a
+receiver is on the ray: the one share a physical requirement bounds). With the flux
+on the receiver maps, of the method and of the reference, this says why a flux ratio
+is far from 1: light lost to total internal reflection, held back unconverged,
+splatted where no receiver is, or never emitted (a dark light).
 
 Budgets of both sides (:func:`method_budget`, :func:`reference_budget_table`), in
 watts per RGB channel, each as a :class:`Table` of :data:`SIDE_COLUMNS` whose rows
@@ -24,7 +28,8 @@ have a ``role``:
   items of :data:`renderers.mitsuba.photons.BUDGET_ITEMS`, from a separate
   caustic-only trace (:func:`harness.compare.probe.reference_budget`).
 * ``detail``: a share of one part, not added (the splatted vertices' own flux; the
-  splats off every receiver; the reference trace's maps).
+  splats off every receiver; the exact fates of the vertices without a verified hit,
+  :data:`SEARCH_ROWS`; the reference trace's maps).
 * ``unaccounted``: emitted minus the parts. Not a part: a closing budget has it at
   float round-off (both sides measured ~1e-5 of the emitted flux), so anything
   larger is flux a side created or lost without saying where (the method: splats
@@ -43,7 +48,8 @@ from renderers.results import ReceiverMap
 from reports.records import Table
 from scenes import Scene
 
-__all__ = ["BUDGET_COLUMNS", "METHOD_ROW", "REFERENCE_ROW", "SIDE_COLUMNS", "budget_closure",
+__all__ = ["BUDGET_COLUMNS", "METHOD_ROW", "REFERENCE_ROW", "SEARCH_ROWS", "SIDE_COLUMNS",
+           "budget_closure",
            "flux_budget", "method_budget", "reference_budget_table", "side_budgets"]
 
 BUDGET_COLUMNS = ("item", "flux_w", "fraction")
@@ -59,6 +65,18 @@ _STATUS_ROWS = (
     ("diverged", "diverged"),
     ("no_exit", "no exit surface found"),
     ("reentered", "re-entered the object: the two-transmission chain ends"),
+)
+
+
+#: The exact fates of the vertices whose search ended without a verified hit (keys of
+#: :func:`harness.checks.stability.search_outcomes`), their ``key`` and label.
+SEARCH_ROWS = (
+    ("leaves_scene_flux_fraction", "leaves_scene",
+     "  of the lost, unconverged, diverged: leaves the scene (exact ray meets nothing)"),
+    ("meets_object_flux_fraction", "meets_object",
+     "  of the lost, unconverged, diverged: meets an object again (a chain not modelled)"),
+    ("estimator_failed_flux_fraction", "estimator_failed",
+     "  of the lost, unconverged, diverged: estimator failed (exact ray meets a receiver)"),
 )
 
 
@@ -104,6 +122,10 @@ def flux_budget(metadata: Mapping, stability: Mapping | None,
         off = (stability or {}).get("off_receiver_flux_fraction")
         if off is not None:
             rows.append(("  of the hits: off every receiver (exact ray)", watts(off), off))
+        for key, _, label in SEARCH_ROWS:
+            share = (stability or {}).get(key)
+            if share is not None:
+                rows.append((label, watts(share), share))
     method_w, reference_w = _received(method_maps), _received(reference_maps)
     for label, value in ((METHOD_ROW, method_w), (REFERENCE_ROW, reference_w)):
         fraction = value / traced if traced else None
@@ -196,6 +218,11 @@ def method_budget(metadata: Mapping, stability: Mapping | None,
     if off is not None:
         rows.append(_row("  of the splatted: off every receiver (exact ray)", "off_receiver",
                          "detail", None, float(off), total=float(off) * total))
+    for key, short, label in SEARCH_ROWS:
+        share = (stability or {}).get(key)
+        if share is not None:
+            rows.append(_row(label, short, "detail", None, float(share),
+                             total=float(share) * total))
     rest = (emitted - sum(parts)) if emitted is not None else None
     rest_total = total - float(sum(np.sum(p) for p in parts))
     rows.append(_row(_UNACCOUNTED, "unaccounted", "unaccounted", rest, fraction(rest_total),

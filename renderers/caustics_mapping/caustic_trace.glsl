@@ -14,7 +14,9 @@
 //   4: xyz receiver normal at the hit, w 0
 // History (binding 1): u_iterations + 1 floats per vertex, the estimate after
 // 0, 1, ..., u_iterations updates (entry 0 is the start d_1 = g(0)); after a
-// lost lookup or a divergence the last estimate is repeated.
+// lost lookup or a divergence the last estimate is repeated. A reflected vertex whose
+// estimate reflected_search() replaced keeps the estimator's history; its record holds
+// the search's d.
 //
 // The estimators (estimators.glsl) find where the ray v + d r meets the receivers
 // in the receiver positions atlas: T(x), the receiver position at x's light-space
@@ -418,6 +420,201 @@ bool reflection_blocked(vec3 v, vec3 r, float d, int object, bool edge) {
     return false;
 }
 
+// The receiver search for a reflected ray that the estimator left unverified
+// (u_reflected_search; verified hits). The estimators solve h(d) = g(d) - d = 0 with
+// g(d) = |T(P(d)) - v|, a root where h changes sign when the ray runs on with the
+// light (beyond the hit, T(P(d)) lies back towards the light from P(d): g < d). A ray
+// reflected back towards the light does not: beyond the hit T(P(d)) lies farther
+// from v than P(d), so g(d) >= d on both sides and h only touches 0 there (a bowl's
+// sun-facing outside under a low sun: the secant and its bracket run away from the
+// hit). This search solves instead for the signed depth along the light,
+//   sigma(d) = L(T(P(d))) - L(P(d))   (L: light_distance; m),
+// > 0 while P(d) is nearer the light than the receiver seen through it, < 0 behind it:
+// sigma changes sign where the ray meets the receiver, whichever way the ray runs. It
+// starts from the tangent plane of the receiver seen through v, T(v) with normal m:
+// d_1 = (T(v) - v) . m / -(r . m), the hit itself on a flat receiver under a
+// directional light, where sigma is linear in d; while sigma(d_1) > 0 (the receiver
+// falls away) the far end doubles, at most REFLECTED_MARCH times; then false position
+// with the Illinois halving on the bracket [lo, hi] (sigma(lo) > 0 >= sigma(hi)), at
+// most REFLECTED_STEPS updates, stopping at |sigma| within the estimators' tolerance
+// (u_converged positions texels). False where the ray leaves that tangent plane (v
+// and v + r on one side of it) or a probe sees no receiver: the vertex stays
+// unconverged. The caller verifies the result as any estimate.
+const int REFLECTED_MARCH = 4;
+const int REFLECTED_STEPS = 8;
+uniform int u_reflected_search;     // 1: reflected_search() after an unverified estimate
+uniform int u_contact_test;         // 1: a reflected hit under a contact ends (under_contact)
+
+bool depth_gap(vec3 x, out float sigma) {
+    vec4 t;
+    vec3 m;
+    sigma = 0.0;
+    if (!receiver_or_edge(x, t, m)) return false;
+    sigma = light_distance(t.xyz) - light_distance(x);
+    return true;
+}
+
+bool reflected_search(vec3 v, vec3 r, out float d) {
+    d = 0.0;
+    vec4 t0;
+    vec3 m;
+    if (!receiver_or_edge(v, t0, m)) return false;
+    float above = dot(v - t0.xyz, m), approach = -dot(r, m);
+    float s_lo = light_distance(t0.xyz) - light_distance(v);
+    if (!(above > 0.0) || !(approach > 0.0) || !(s_lo > 0.0)) return false;
+    float lo = 0.0, hi = above / approach, s_hi = 0.0;
+    bool bracketed = false;
+    for (int k = 0; k < REFLECTED_MARCH && !bracketed; ++k) {
+        if (!depth_gap(v + hi * r, s_hi)) return false;
+        if (abs(s_hi) <= ESTIMATE_TOLERANCE(0, v + hi * r)) { d = hi; return true; }
+        if (s_hi < 0.0) {
+            bracketed = true;
+        } else {
+            lo = hi;
+            s_lo = s_hi;
+            hi *= 2.0;
+        }
+    }
+    if (!bracketed) return false;
+    int side = 0;                    // the end kept last time: +1 lo, -1 hi
+    for (int k = 0; k < REFLECTED_STEPS; ++k) {
+        d = lo + s_lo * (hi - lo) / (s_lo - s_hi);    // inside (lo, hi): s_lo > 0 > s_hi
+        float s;
+        if (!depth_gap(v + d * r, s)) return false;
+        if (abs(s) <= ESTIMATE_TOLERANCE(0, v + d * r)) return true;
+        if (s > 0.0) {
+            lo = d;
+            s_lo = s;
+            if (side == 1) s_hi *= 0.5;       // Illinois: the stale end's value halved
+            side = 1;
+        } else {
+            hi = d;
+            s_hi = s;
+            if (side == -1) s_lo *= 0.5;
+            side = -1;
+        }
+    }
+    d = lo + s_lo * (hi - lo) / (s_lo - s_hi);
+    return true;
+}
+
+// Whether the ray v + s r, s in (0, d], stays in front of every object surface the
+// light sees (u_front_positions, nearest texel), as far as that image shows: no
+// sample farther from the light than the front surface f seen through its texel by
+// more than that surface's depth spread over half a texel plus a quarter texel,
+// w (0.5 tan(theta) + 0.25) with w the texel width at the sample and theta the angle
+// between the surface normal and the light (tan capped at 10). The samples,
+// FRONT_STEPS of them, cover only the part of the ray inside the object's bounding
+// box grown by a texel (past it no surface of the object is seen: reentry_samples'
+// argument), those within 2 w of v skipped (the ray still leaves its own sheet's
+// rounded depths). A stricter test than reflection_blocked, for the hits of
+// reflected_search only: those rays run back towards the light, and where one
+// crosses a sheet that the light sees edge-on (a bowl's side wall, from its far inside
+// wall) neither image shows the crossing, so reflection_blocked let them through
+// (bowl_sun: flux ratio 1.05 with them). A ray that passes behind a surface the light
+// sees without meeting it (under a bowl's rim seen from the light) fails the test too
+// and stays unconverged: measured in the flux budget's "estimator failed" share.
+const int FRONT_STEPS = 96;
+bool stays_in_front(vec3 v, vec3 r, float d, int object) {
+    float view = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z);
+    float len = min(d, float(reentry_samples(v, r, object, d, view)) / float(REENTRY_STEPS) * d
+                       + d / float(REENTRY_STEPS));
+    float step = len / float(FRONT_STEPS);
+    for (int k = 1; k <= FRONT_STEPS; ++k) {
+        vec3 x = v + (step * float(k)) * r;
+        float w = view / float(u_grid) * (u_obj_persp == 1 ? length(x - u_light_pos) : 1.0);
+        if (step * float(k) < 2.0 * w) continue;
+        int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
+        vec2 ndc;
+        if (!project(u_obj_vp[face], x, ndc)) continue;
+        if (any(greaterThan(abs(ndc), vec2(1.0)))) continue;
+        ivec2 t = atlas_texel(face, min(ivec2(floor((ndc * 0.5 + 0.5) * float(u_grid))),
+                                        ivec2(u_grid - 1)), u_grid, u_front_stride);
+        vec4 f = texelFetch(u_front_positions, t, 0);
+        if (f.w < 0.5) continue;
+        float c = abs(dot(texelFetch(u_front_normals, t, 0).xyz, incident_dir(x)));
+        float slope = min(sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-3), 10.0);
+        if (light_distance(x) > light_distance(f.xyz) + w * (0.5 * slope + 0.25)) return false;
+    }
+    return true;
+}
+
+// Whether the hit p on a receiver of normal `normal` lies where `object` rests on the
+// receiver: the front atlas (nearest texel, the grid's resolution) shows the object
+// at p's texel, its surface within 30 deg of parallel to the receiver, and the
+// surface's tangent plane there meets the light ray through p within a quarter texel
+// width w of p (the plane carries the texel centre's point over to p's own light ray,
+// exactly on a flat facet). Light cannot reach such a point but through the object: a
+// bowl's bottom on the floor, where reflections off the inside meet the bowl within
+// millimetres of the floor, closer than the object images resolve (reflection_blocked
+// sees no crossing there).
+bool under_contact(vec3 p, vec3 normal, int object) {
+    int face = u_obj_cube == 1 ? cube_face(p - u_light_pos) : 0;
+    vec2 ndc;
+    if (!project(u_obj_vp[face], p, ndc) || any(greaterThan(abs(ndc), vec2(1.0)))) return false;
+    ivec2 t = atlas_texel(face, min(ivec2(floor((ndc * 0.5 + 0.5) * float(u_grid))),
+                                    ivec2(u_grid - 1)), u_grid, u_front_stride);
+    vec4 f = texelFetch(u_front_positions, t, 0);
+    if (abs(f.w - float(object + 1)) >= 0.5) return false;
+    vec3 m = texelFetch(u_front_normals, t, 0).xyz;
+    if (abs(dot(m, normal)) < 0.866) return false;
+    vec3 l = incident_dir(p);
+    float c = dot(l, m);
+    if (abs(c) < 1e-3) return false;
+    float gap = dot(p - f.xyz, m) / c;        // from the plane to p along the light ray (m)
+    float view = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z);
+    float w = view / float(u_grid) * (u_obj_persp == 1 ? length(p - u_light_pos) : 1.0);
+    return abs(gap) <= 0.25 * w;
+}
+
+// The status of the estimate d on the ray v + d r (n: the surface normal at v, facing
+// the light): STATUS_HIT, or with verified hits STATUS_UNCONVERGED or
+// STATUS_REENTERED; without, STATUS_LOST where no receiver is seen at the estimate.
+// `receiver` (index, -1 none) and `normal`: the receiver seen at the estimate.
+int verify_hit(vec3 v, vec3 r, vec3 n, float d, int material, int object,
+               out float receiver, out vec3 normal) {
+    vec3 p = v + d * r;
+    int status = STATUS_HIT;
+    receiver = -1.0;
+    normal = vec3(0.0);
+    vec4 t;
+    vec3 n_seen;
+    bool seen = receiver_at(p, t, n_seen);
+    if (seen) {
+        receiver = t.w - 1.0;
+        normal = n_seen;
+    }
+    if (u_verify == 1) {
+        float tol = u_hit_tolerance;
+        if (tol <= 0.0) {
+            float c = seen ? abs(dot(normal, incident_dir(p))) : 1.0;
+            tol = map_texel_width(p, u_positions_size) / max(c, 0.1);
+        }
+        if (!seen || length(t.xyz - p) > tol) status = STATUS_UNCONVERGED;
+        // A reflected ray leaving the receiver's tangent plane at T(P) (v and v + r
+        // on the same side) cannot meet it: an estimate within the tolerance of it
+        // is a ray from an object that touches the receiver (bowl_sun's bottom,
+        // within a texel of the floor, reflecting upwards: 1.4 % of its flux).
+        else if (material == 3 && dot(r, normal) * dot(v - t.xyz, normal) >= 0.0)
+            status = STATUS_UNCONVERGED;
+        // A hit where the object rests on the receiver is reached only through it.
+        else if (material == 3 && u_convex[object] == 0 && u_contact_test == 1
+                 && under_contact(p, normal, object))
+            status = STATUS_REENTERED;
+        // Sampled up to the receiver's tangent plane at T(P), past P where P stops
+        // short of it within the tolerance: a ray that meets the object within a
+        // texel of the receiver (bowl_sun's bottom, 1.3 % of its flux, all in one
+        // spot under the bowl) crosses it only there.
+        else if (material == 3 && u_convex[object] == 0
+                 && reflection_blocked(v, r, max(d, dot(t.xyz - v, normal) / dot(r, normal)),
+                                       object, abs(dot(r, n)) > GRAZING))
+            status = STATUS_REENTERED;
+    } else if (!seen) {
+        status = STATUS_LOST;
+    }
+    return status;
+}
+
 void write_record(int base, vec3 v, float view, vec3 r, float d, vec3 p, int status,
                   vec3 flux, float receiver, vec3 normal) {
     records[base + 0] = vec4(v, view);
@@ -542,37 +739,25 @@ void main() {
     vec3 p = v + d * r;
     float receiver = -1.0;
     vec3 normal = vec3(0.0);
-    if (status == STATUS_HIT) {
-        vec4 t;
-        vec3 n_seen;
-        bool seen = receiver_at(p, t, n_seen);
-        if (seen) {
-            receiver = t.w - 1.0;
-            normal = n_seen;
-        }
-        if (u_verify == 1) {
-            float tol = u_hit_tolerance;
-            if (tol <= 0.0) {
-                float c = seen ? abs(dot(normal, incident_dir(p))) : 1.0;
-                tol = map_texel_width(p, u_positions_size) / max(c, 0.1);
+    if (status == STATUS_HIT) status = verify_hit(v, r, n, d, material, object, receiver, normal);
+    // A reflected ray left unverified gets the signed-depth search (reflected_search);
+    // its estimate replaces the first only where it is verified, so every vertex the
+    // estimator verified keeps its record bit for bit.
+    if (u_reflected_search == 1 && material == 3 && status == STATUS_UNCONVERGED) {
+        float d2;
+        if (reflected_search(v, r, d2)) {
+            float receiver2;
+            vec3 normal2;
+            int status2 = verify_hit(v, r, n, d2, material, object, receiver2, normal2);
+            if (status2 == STATUS_HIT && !stays_in_front(v, r, d2, object))
+                status2 = STATUS_UNCONVERGED;
+            if (status2 != STATUS_UNCONVERGED) {
+                d = d2;
+                p = v + d * r;
+                status = status2;
+                receiver = receiver2;
+                normal = normal2;
             }
-            if (!seen || length(t.xyz - p) > tol) status = STATUS_UNCONVERGED;
-            // A reflected ray leaving the receiver's tangent plane at T(P) (v and v + r
-            // on the same side) cannot meet it: an estimate within the tolerance of it
-            // is a ray from an object that touches the receiver (bowl_sun's bottom,
-            // within a texel of the floor, reflecting upwards: 1.4 % of its flux).
-            else if (material == 3 && dot(r, normal) * dot(v - t.xyz, normal) >= 0.0)
-                status = STATUS_UNCONVERGED;
-            // Sampled up to the receiver's tangent plane at T(P), past P where P stops
-            // short of it within the tolerance: a ray that meets the object within a
-            // texel of the receiver (bowl_sun's bottom, 1.3 % of its flux, all in one
-            // spot under the bowl) crosses it only there.
-            else if (material == 3 && u_convex[object] == 0
-                     && reflection_blocked(v, r, max(d, dot(t.xyz - v, normal) / dot(r, normal)),
-                                           object, abs(dot(r, n)) > GRAZING))
-                status = STATUS_REENTERED;
-        } else if (!seen) {
-            status = STATUS_LOST;
         }
     }
     // Eq. 7 for a water surface: attenuation from the surface to the receiver.

@@ -64,6 +64,14 @@ class TraceOptions:
         The estimators stop at a residual |h| of at most this many positions-map
         texels at the estimate (0: only at h = 0); :data:`CONVERGED` with the
         safeguard, 0 without (the paper's iterations run in full).
+    reflected_search : bool
+        A reflected ray whose estimate is not verified is searched again on the
+        signed depth along the light from the tangent plane of the receiver seen
+        through its origin (``reflected_search`` in ``caustic_trace.glsl``); on with
+        verified hits.
+    contact_test : bool
+        A reflected hit where the object rests on the receiver (``under_contact`` in
+        ``caustic_trace.glsl``) ends as ``reentered``; on with verified hits.
     """
 
     estimator: str
@@ -77,6 +85,8 @@ class TraceOptions:
     hit_tolerance: float | None = None
     exit_iterations: int = 8
     converged: float = 0.0
+    reflected_search: bool = False
+    contact_test: bool = False
 
 
 #: Residual |h| (positions-map texels at the estimate) at which the safeguarded
@@ -95,7 +105,8 @@ def trace_options(settings, eps: float) -> TraceOptions:
         filtered=settings.lookup == "filtered", start=settings.start,
         start_distance=settings.start_distance, verify=bool(settings.verify_hits),
         hit_tolerance=settings.hit_tolerance,
-        converged=CONVERGED if settings.safeguarded else 0.0)
+        converged=CONVERGED if settings.safeguarded else 0.0,
+        reflected_search=bool(settings.verify_hits), contact_test=bool(settings.verify_hits))
 #: Largest number of caustic objects one render handles.
 MAX_OBJECTS = 8
 RECORD_FLOATS = 20
@@ -287,6 +298,8 @@ def run_caustic_trace(
         ("u_hit_tolerance", float(options.hit_tolerance or 0.0)), ("u_count", count),
         ("u_converged", float(options.converged)), ("u_has_far", int(far is not None)),
         ("u_front_stride", front_stride), ("u_patches", int(patches is not None)),
+        ("u_reflected_search", int(options.reflected_search)),
+        ("u_contact_test", int(options.contact_test)),
     ):
         set_uniform(program, name, value)
     records.bind_to_storage_buffer(0)

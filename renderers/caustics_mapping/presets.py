@@ -11,15 +11,17 @@ A setting the scene file or the command line gives always wins; a setting left a
 * ``strong``: the best known implementation: bilinear lookups within one surface
   with renormalised normals, the exit surface at 4x the grid's resolution (2x where
   every closed dielectric bounds a convex body: see :func:`resolve_scene`), verified
-  hits, a tight rectangular object frustum, the safeguarded secant estimator with 5
-  iterations (verified hits drop what has not converged: on glass_sphere the
-  modified estimator leaves 17 % of the flux unconverged after 3 iterations and
-  3.2 % after 8; the secant 0.05 % after 5) and triangle splats (flux / area between
-  neighbouring hits; Ernst et al. 2005, webgl-water), which measured better than
-  footprint Gaussians (caustic relMSE 0.0009 against 0.0019 on glass_sphere), with
-  rim patches of 3 x 3 (the quads at the silhouette traced again, finer: whole-
-  receiver excess relMSE on glass_sphere 5.6e-4 -> 2.4e-4, metal_ring's caustic
-  region 1.3e-2 -> 2.2e-3; docs/method.md).
+  hits (a reflected ray they leave unverified searched again on the signed depth
+  along the light, and a reflected hit where the object rests on the receiver
+  dropped: ``caustic_trace.TraceOptions``), a tight rectangular object frustum, the
+  safeguarded secant estimator with 5 iterations (verified hits drop what has not
+  converged: on glass_sphere the modified estimator leaves 17 % of the flux
+  unconverged after 3 iterations and 3.2 % after 8; the secant 0.05 % after 5) and
+  triangle splats (flux / area between neighbouring hits; Ernst et al. 2005,
+  webgl-water), which measured better than footprint Gaussians (caustic relMSE
+  0.0009 against 0.0019 on glass_sphere), with rim patches of 3 x 3 (the quads at
+  the silhouette traced again, finer: whole-receiver excess relMSE on glass_sphere
+  5.6e-4 -> 2.4e-4, metal_ring's caustic region 1.3e-2 -> 2.2e-3; docs/method.md).
 """
 
 from __future__ import annotations

@@ -1,0 +1,128 @@
+"""The concave reflectors' hard cases (``scenes/hard/concave``): a polished
+hemispherical bowl (deep) and a spherical cap of half its depth (shallow) under suns
+15 to 75 deg high, and a half-pipe under a 20 deg sun; the reference counts one chain,
+``L R D`` (objects[0]). Physical requirements on the strong preset, per member:
+
+* flux agreement: the receiver-map flux / a fresh photon-traced reference's, per RGB
+  channel, within ``FLUX_TOLERANCE`` (2 %) + 4 standard errors of the reference's total
+  (as ``test_reflection_flux.py``, the same grid of 128, small maps, 4 seeds of 2^20
+  photons);
+* the estimator found the receiver: the share of the traced flux whose search ended
+  without a verified hit while its exact ray meets a receiver first
+  (``estimator_failed_flux_fraction`` of ``harness.checks.stability.search_outcomes``)
+  is at most 1 % (the bound the budget's "estimator failed" row is held to).
+
+A member that misses either today is a known gap (a strict xfail: it fails once the gap
+closes, until the entry goes), with its measured numbers (llvmpipe, these settings)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from harness.checks.physical import FLUX_TOLERANCE, flux_standard_error
+from harness.checks.stability import search_outcomes
+from renderers.caustics_mapping import render_frame
+from renderers.mitsuba.reference import estimate_receivers
+from scenes.geometry import build_geometry
+
+from .conftest import ROOT, small_scene
+
+CONCAVE = ROOT / "scenes" / "hard" / "concave"
+#: Photons per seed of the reference: one whole launch (relative standard error of the
+#: total ~0.1 % where the floor's caustic is not small).
+PHOTONS = 1 << 20
+#: Largest share of the traced flux the estimator may leave unfound while its exact
+#: ray meets a receiver: 1 %, half the flux agreement's 2 % tolerance.
+FAILED_BOUND = 0.01
+
+#: Members missing a requirement today: what is wrong, measured (flux ratio, G channel;
+#: estimator-failed share of the traced flux).
+GAPS = {
+    "bowl_deep_sun75": "flux 1.064 (bound 1 ± 0.029), cause not found: the floor gets "
+                       "1.7 % of the traced flux, a third of it reflected within 7 deg of "
+                       "grazing (|l.n| < 0.12) at the outer wall's terminator; hits whose "
+                       "exact ray meets the bowl are 1.7 % of it, the rest of the excess "
+                       "is in hits whose exact rays reach the floor, mostly 1.0 to 1.1 m "
+                       "from the bowl's axis (+17 % there); grid 64, 128, 256: "
+                       "1.089, 1.064, 1.058",
+    "bowl_shallow_sun45": "flux 1.068 (bound 1 ± 0.044), cause not found: the floor gets "
+                          "0.4 % of the traced flux, 94 % of it reflected within 7 deg of "
+                          "grazing at the terminator; grid 64, 128, 256: 1.160, 1.068, "
+                          "1.113",
+}
+#: The issue's scene (30 deg) runs by default; the rest of the family is slow.
+DEFAULT = {"bowl_deep_sun30"}
+MEMBERS = sorted(p.stem for p in CONCAVE.glob("*.toml"))
+
+
+def _param(name):
+    marks = []
+    if name in GAPS:
+        marks.append(pytest.mark.xfail(strict=True, reason=GAPS[name]))
+    if name not in DEFAULT:
+        marks.append(pytest.mark.slow)
+    return pytest.param(name, marks=marks, id=name)
+
+
+@pytest.mark.regression_lock
+def test_the_family_is_what_the_docs_list():
+    """Regression lock: 5 elevations x 2 depths of bowl and one half-pipe."""
+    assert len(MEMBERS) == 11 and set(GAPS) <= set(MEMBERS)
+
+
+@pytest.mark.physical_requirement
+@pytest.mark.parametrize("name", [_param(n) for n in MEMBERS])
+def test_strong_finds_the_concave_reflection(context_factory, name):
+    """Physical requirements: flux agreement per channel and the estimator-failed share
+    at most 1 % (before the reflected search the 30 deg deep bowl was at flux 0.47,
+    estimator failed 17.5 %)."""
+    scene = small_scene(CONCAVE / f"{name}.toml", preset="strong", grid=128,
+                        caustic_map=256, positions_map=256, receiver_map=[128, 128], seeds=4)
+    geometry = build_geometry(scene)
+    frame = render_frame(scene, ctx=context_factory(), geometry=geometry)
+    failed = search_outcomes(scene, geometry, frame.traced_records())[
+        "estimator_failed_flux_fraction"]
+    method = sum(m.total_flux() for m in frame.result.receivers)
+    reference = estimate_receivers(scene, photons=PHOTONS, seeds=4, time_cap=1e-3,
+                                   caustic_only=True)
+    expected = sum(m.total_flux() for m in reference.caustic)
+    # |method - reference| within (2 % + 4 standard errors) of the reference's total; a
+    # channel the reference leaves dark (the shallow bowl under a high sun) allows none.
+    lit = expected > 0
+    bound = np.where(lit, FLUX_TOLERANCE + 4 * np.where(
+        lit, flux_standard_error(reference.caustic), 0.0), 0.0) * expected
+    assert failed <= FAILED_BOUND, f"estimator failed on {failed:.4f} of the traced flux"
+    assert np.all(np.abs(method - expected) <= bound), (
+        f"flux {np.round(method, 4)} W against the reference's {np.round(expected, 4)} W "
+        f"(R, G, B), allowed difference {np.round(bound, 4)} W")
+
+
+@pytest.mark.regression_lock
+def test_the_search_changes_only_what_the_estimator_left_unverified(context_factory,
+                                                                      monkeypatch):
+    """Regression lock: with the reflected search and the contact test off
+    (``TraceOptions``), every vertex the estimator verified as a hit on the 30 deg
+    deep bowl keeps its record bit for bit with them on, but for the hits the contact
+    test ends (status ``reentered``, the estimate kept); and the search turns a part of
+    the unconverged vertices into hits (17.5 % of the traced flux on these settings)."""
+    import dataclasses  # noqa: PLC0415
+
+    from renderers.caustics_mapping import caustic_trace, light_sample  # noqa: PLC0415
+
+    scene = small_scene(CONCAVE / "bowl_deep_sun30.toml", preset="strong", grid=64)
+    on = render_frame(scene, ctx=context_factory()).hits
+    options = caustic_trace.trace_options
+    monkeypatch.setattr(light_sample, "trace_options", lambda s, e: dataclasses.replace(
+        options(s, e), reflected_search=False, contact_test=False))
+    off = render_frame(scene, ctx=context_factory()).hits
+    hit, reentered = caustic_trace.STATUS["hit"], caustic_trace.STATUS["reentered"]
+    kept = off["status"] == hit
+    assert kept.sum() > 100
+    assert np.isin(on["status"][kept], [hit, reentered]).all()
+    same = kept & (on["status"] == hit)
+    for key in ("distance", "hit", "flux", "receiver"):
+        np.testing.assert_array_equal(on[key][same], off[key][same], err_msg=key)
+    np.testing.assert_array_equal(on["distance"][kept], off["distance"][kept])
+    found = (off["status"] == caustic_trace.STATUS["unconverged"]) & (on["status"] == hit)
+    assert found.sum() > 0.1 * kept.sum()
