@@ -30,6 +30,13 @@ On the method (each check name is what ``data/known_gaps.toml`` refers to):
     relative error of about 1 / (√π D^1.5) for an object D cells across (< 0.1 % at
     D ≥ 32). A method that conserves energy has room; a method that splats rays whose
     exact path misses the receivers, or traps light the scene cannot trap, does not.
+``estimator found the receiver``
+    The share of the traced flux whose search ended without a verified hit although
+    its exact ray meets a receiver first (``estimator_failed_flux_fraction`` of
+    :func:`harness.checks.stability.search_outcomes`) is at most
+    ``ESTIMATOR_FAILED_BOUND`` (1 %, half the flux agreement's tolerance): light that
+    truly leaves the scene or meets the object again is physics the reference does not
+    count either; light whose receiver the estimator did not find is the method's loss.
 ``no TIR in a sphere``
     A ray entering a sphere leaves it at the angle it was refracted to on entry,
     below the critical angle, so a sphere traps no light. Both renderers see an
@@ -93,6 +100,9 @@ __all__ = [
 PHYSICAL = "physical requirement"
 #: Allowed relative flux difference between method and reference (module docstring).
 FLUX_TOLERANCE = 0.02
+#: Largest share of the traced flux the estimator may leave unfound while its exact ray
+#: meets a receiver: half of :data:`FLUX_TOLERANCE`.
+ESTIMATOR_FAILED_BOUND = 0.01
 #: Two-sided 95 % normal quantile of the flux ratio's interval.
 Z95 = 1.959963984540054
 #: Energy bound's allowance for float32 accumulation.
@@ -103,7 +113,8 @@ FOCUS_WINDOW = 4.0
 FOCUS_SLACK = 0.1
 #: Radii (texels) of the encircled-flux profile.
 PROFILE_RADII = (1, 2, 4, 8)
-CHECK_NAMES = ("finite", "non-negative", "energy", "flux agreement", "no TIR in a sphere",
+CHECK_NAMES = ("finite", "non-negative", "energy", "flux agreement", "estimator found the receiver",
+               "no TIR in a sphere",
                "reference energy", "reference flux", "reference focus", "reference profile")
 
 
@@ -211,6 +222,13 @@ def method_requirements(scene: Scene, geometry: SceneGeometry, *, method_maps, r
             f"discretisation < 0.1 %), judged from the ratio's 95 % interval (the "
             f"reference total's standard error {np.asarray(se, float)[lit[worst]]:.2g}, "
             f"from {note})", interval=interval))
+    if "estimator_failed_flux_fraction" in stability:
+        checks.append(_check(
+            "estimator found the receiver", stability["estimator_failed_flux_fraction"],
+            ESTIMATOR_FAILED_BOUND, "max",
+            "share of the traced flux left without a verified hit although its exact ray "
+            "meets a receiver first (the budget's 'estimator failed' row); 1 %: half the "
+            "flux agreement's 2 %"))
     deficit = sphere_deficit(scene, geometry)
     if deficit is not None and "tir_flux_fraction" in stability:
         checks.append(_check(
