@@ -14,14 +14,14 @@ cap):
 measure                          strong              paper
 ===============================  ==================  ==================
 glass_sphere excess relMSE       5.64e-5             0.0422
-  (95 % interval)                [4.72e-5, 6.56e-5]  [0.0421, 0.0423]
+  (95 % interval)                [4.77e-5, 6.51e-5]  [0.0422, 0.0423]
 focus peak / reference           0.998               0.47
 share within 5 cm (ref 0.351)    0.351               0.166
 flux ratio                       0.9985              1.0006
 TIR / off-receiver flux          0 / 0               1.15 % / 0.95 %
 dispersion flux per channel      0.997 0.994 0.990   1.033 1.055 1.090
-bunny excess relMSE              0.0691              0.468
-  (95 % interval)                [0.0686, 0.0696]    [0.465, 0.471]
+bunny excess relMSE              0.0695              0.473
+  (95 % interval)                [0.0693, 0.0697]    [0.472, 0.474]
 bunny vertices on the object     9,813               4,753
 camera black fraction, |Δ| vs    0.0031              0.027
   exact (glass_sphere, 512²)
