@@ -65,8 +65,8 @@ from scenes.effects import EFFECTS
 from scenes.files import atomic_write_bytes, jsonable
 
 __all__ = ["DEFAULT_PREVIEW_SIZE", "FLUX_RATIO_RANGE", "KEY_METRICS", "SOFTWARE_GL",
-           "build_report", "hardware", "scene_folder", "speedup_text", "write_index",
-           "write_page"]
+           "build_report", "hardware", "page_number", "scene_folder", "speedup_text",
+           "write_index", "write_page"]
 
 #: Largest side (pixels) of a preview; larger images are box-filtered down by an
 #: integer factor, and the page says so.
@@ -108,7 +108,7 @@ def scene_folder(name: str, *, taken: Sequence[str] = ()) -> str:
     return candidate
 
 
-def _number(value: Any) -> str:
+def page_number(value: Any) -> str:
     """Numbers for tables: 4 significant digits, ∞ and n/a spelled out, None as —."""
     if value is None:
         return "—"
@@ -141,7 +141,7 @@ def speedup_text(speedup: EqualErrorSpeedup | None) -> str:
     None."""
     if speedup is None:
         return "—"
-    value = f"{_number(speedup.speedup)}×"
+    value = f"{page_number(speedup.speedup)}×"
     if speedup.bound_kind == "lower bound":
         return f"at least {value} (95 % confidence)"
     if speedup.bound_kind == "upper bound":
@@ -150,14 +150,14 @@ def speedup_text(speedup: EqualErrorSpeedup | None) -> str:
     # An interval that rounds to one number at the shown digits (no uncertainty was
     # propagated, e.g. an exact fit) says nothing: omitted.
     interval = ""
-    if math.isfinite(low) and math.isfinite(high) and _number(low) != _number(high):
-        interval = f"95 % interval {_number(low)}×–{_number(high)}×"
+    if math.isfinite(low) and math.isfinite(high) and page_number(low) != page_number(high):
+        interval = f"95 % interval {page_number(low)}×–{page_number(high)}×"
     elif math.isfinite(low) and high == math.inf:
-        interval = f"95 % interval from {_number(low)}×"
+        interval = f"95 % interval from {page_number(low)}×"
     if slower(speedup.speedup):
         # Below 1 the method is slower than the reference at its own error.
         inside = ", ".join(p for p in (f"speedup {value}", interval) if p)
-        return f"{_number(1 / speedup.speedup)}× slower ({inside})"
+        return f"{page_number(1 / speedup.speedup)}× slower ({inside})"
     return f"{value} ({interval})" if interval else value
 
 
@@ -255,7 +255,7 @@ def page_environment() -> jinja2.Environment:
         trim_blocks=True,
         lstrip_blocks=True,
     )
-    env.filters["num"] = _number
+    env.filters["num"] = page_number
     env.filters["speedup"] = speedup_text
     env.globals["effect_notes"] = EFFECTS
     env.tests["mapping"] = lambda value: isinstance(value, dict)

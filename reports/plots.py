@@ -161,6 +161,24 @@ def _excess_column(table: Table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return _loggable(shown), np.nan_to_num(below), np.nan_to_num(above)
 
 
+def _reference_curve(ax, table: Table) -> bool:
+    """Draw the table's reference rows: excess relMSE (95 % bars) against warm time
+    (solid) and cold time (build + compile + warm, dashed); whether any point is finite."""
+    series = np.array(table.column("series"))
+    errors, below, above = _excess_column(table)
+    warm = _loggable(_float(table.column("time_warm_s")))
+    cold = _loggable(_float(table.column("time_cold_s")))
+    ref = np.flatnonzero(series == "reference")
+    if not ref.size:
+        return False
+    ref = ref[np.argsort(warm[ref])]
+    ax.errorbar(warm[ref], errors[ref], yerr=[below[ref], above[ref]], fmt="-s",
+                color="tab:red", markersize=3, elinewidth=0.7, label="reference (Mitsuba), warm")
+    ax.plot(cold[ref], errors[ref], "--", color="tab:red", alpha=0.6,
+            label="reference, cold (build + compile + warm)")
+    return bool(np.isfinite(errors[ref]).any())
+
+
 def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
                 point: tuple[float, float] | None = None,
                 cold: EqualErrorSpeedup | None = None):
@@ -207,14 +225,7 @@ def cost_figure(table: Table, *, speedup: EqualErrorSpeedup | None = None,
         front = front[np.argsort(times[front], kind="stable")]
         ax.plot(times[front], errors[front], "-", color="tab:blue", linewidth=1.2,
                 label="Pareto front (warm)")
-        ref = np.flatnonzero(series == "reference")
-        if ref.size:
-            ref = ref[np.argsort(times[ref])]
-            ax.errorbar(times[ref], errors[ref], yerr=[below[ref], above[ref]], fmt="-s",
-                        color="tab:red", markersize=3, elinewidth=0.7,
-                        label="reference (Mitsuba), warm")
-            ax.plot(cold_times[ref], errors[ref], "--", color="tab:red", alpha=0.6,
-                    label="reference, cold (build + compile + warm)")
+        _reference_curve(ax, table)
         title = "Cost versus accuracy"
         if speedup is not None and _positive(speedup.speedup, speedup.reference_time):
             method_time, method_error = _speedup_point(speedup, point, times[front], errors[front])
@@ -256,22 +267,9 @@ def scene_cost_figure(scene: str, tables: dict[str, Table]):
     with plt.rc_context(_RC):
         figure, ax = plt.subplots(figsize=(6.0, 4.2))
         ax.set_title(f"{scene}: what accuracy costs", fontsize=9)
-        drawn = False
         reference = next((t for t in tables.values()
                           if "reference" in t.column("series")), None)
-        if reference is not None:
-            series = np.array(reference.column("series"))
-            errors, below, above = _excess_column(reference)
-            ref = np.flatnonzero(series == "reference")
-            warm = _loggable(_float(reference.column("time_warm_s")))
-            cold = _loggable(_float(reference.column("time_cold_s")))
-            ref = ref[np.argsort(warm[ref])]
-            ax.errorbar(warm[ref], errors[ref], yerr=[below[ref], above[ref]], fmt="-s",
-                        color="tab:red", markersize=3, elinewidth=0.7,
-                        label="reference (Mitsuba), warm")
-            ax.plot(cold[ref], errors[ref], "--", color="tab:red", alpha=0.6,
-                    label="reference, cold")
-            drawn = bool(np.isfinite(errors[ref]).any())
+        drawn = reference is not None and _reference_curve(ax, reference)
         for i, (method, table) in enumerate(tables.items()):
             series = np.array(table.column("series"))
             mine = np.flatnonzero(series != "reference")

@@ -74,28 +74,40 @@ def _number(value) -> str:
     return f"{value:.3g}"
 
 
+def _excess(values: dict, metric: str) -> str:
+    """A row's metric for the summary: its excess and 95 % interval first, the raw
+    value after (``harness.sweep.rows.row_values``)."""
+    excess = values.get(f"excess_{metric}")
+    if excess is None or not math.isfinite(excess):
+        return f"raw {_number(values.get(metric))}"
+    return (f"{_number(excess)} [{_number(values.get(f'excess_{metric}_low'))}, "
+            f"{_number(values.get(f'excess_{metric}_high'))}] (raw "
+            f"{_number(values.get(metric))})")
+
+
 def _print_summary(rows: list[RowResult], out: str, seconds: float, run: SweepRun) -> None:
     computed = sum(1 for r in rows if not r.cached)
     table = Table(title=markup(f"sweep: {len(rows)} rows, {computed} computed, "
                                f"{run.tasks} tasks ({seconds:.0f} s) -> {out}/index.html"),
-                  caption="receiver 0: relMSE, SSIM, FLIP over the caustic region, flux "
-                  "ratio over the map; time: warm frame time")
-    for column in ("scene", "method", "setting", "relMSE", "SSIM", "FLIP", "flux ratio",
-                   "time ms", "worker", "cached"):
+                  caption="receiver 0, the scene's caustic region: the method's own error "
+                  "against the noise-free image [95 % interval], then the raw value; SSIM: "
+                  "the deficit below a perfect method's; flux: ratio − 1 over the map; "
+                  "time: warm frame time")
+    for column in ("scene", "method", "setting", "excess relMSE", "SSIM deficit",
+                   "flux ratio − 1", "time ms", "worker", "cached"):
         table.add_column(column)
     for r in rows:
         if r.failed:
             cells = (r.job.scene.name, r.job.method, r.job.setting.label,
-                     f"FAILED ({r.stage})", *("–",) * 4, r.worker or "–", "no")
+                     f"FAILED ({r.stage})", *("–",) * 3, r.worker or "–", "no")
         else:
             cells = (r.job.scene.name, r.job.method, r.job.setting.label,
-                     *(_number(r.values.get(k)) for k in ("relmse", "ssim", "flip",
-                                                          "flux_ratio")),
+                     *(_excess(r.values, k) for k in ("relmse", "ssim", "flux_ratio")),
                      _number(r.time_warm_ms), r.worker, "yes" if r.cached else "no")
         table.add_row(*(markup(c) for c in cells))
     console = Console()
     if not console.is_terminal:
-        console = Console(width=160)
+        console = Console(width=220)
     console.print(table)
     for r in rows:
         if r.failed:

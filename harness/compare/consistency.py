@@ -31,28 +31,13 @@ import re
 from html.parser import HTMLParser
 from pathlib import Path
 
-__all__ = ["RELATIVE_TOLERANCE", "disagreements", "page_number"]
+from reports.build import page_number
+
+__all__ = ["RELATIVE_TOLERANCE", "disagreements"]
 
 #: Relative difference two written copies of one float may have (``repr`` round trips
 #: exactly; 1e-12 leaves room for a reader that parses a shorter form).
 RELATIVE_TOLERANCE = 1e-12
-
-
-def page_number(value) -> str:
-    """A number as the pages print it (``reports.build``: 4 significant digits, ``—``
-    for None, ``n/a`` for NaN)."""
-    if value is None:
-        return "—"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, int):
-        return str(value)
-    value = float(value)
-    if math.isnan(value):
-        return "n/a"
-    if math.isinf(value):
-        return "∞" if value > 0 else "−∞"
-    return f"{value:.4g}"
 
 
 class _Tables(HTMLParser):

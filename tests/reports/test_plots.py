@@ -110,6 +110,7 @@ def test_scene_cost_plot_holds_every_method_and_the_reference():
     ax = plots.scene_cost_figure("glass_sphere", tables).axes[0]
     labels = ax.get_legend_handles_labels()[1]
     assert labels.count("reference (Mitsuba), warm") == 1
+    assert labels.count("reference, cold (build + compile + warm)") == 1
     for method in tables:
         assert f"{method}, warm" in labels and f"{method}, cold" in labels
     empty = plots.scene_cost_figure("none", {"paper": _with(table, relmse=float("nan"))})

@@ -16,7 +16,8 @@ import pytest
 
 from harness.cli import main
 from harness.commands.compare import excess_cell
-from harness.compare.consistency import disagreements, page_number
+from harness.compare.consistency import disagreements
+from reports.build import page_number
 from reports.records import MetricValue
 from tests.harness.commands.test_compare import SMALL, _small_scene
 
