@@ -185,18 +185,30 @@ def test_stratified_noise_standard_error_includes_neighbours():
 # ---- calibration: slow, 2000 trials per model ----------------------------------------
 
 
+#: Known gap: at 10 % relative noise the model SE of Poisson-like noise is about 11-14 %
+#: too large (the plug-in h''(R)^2 overstates h''(T)^2), so the interval over-covers.
+_CONSERVATIVE = ("known gap: at 10 % noise the model SE is 11-14 % too large for Poisson "
+                 "and compound-Poisson noise (measured coverage 96.8 / 97.6 / 97.7 % and "
+                 "96.7 / 97.3 / 97.0 %, perfect / uniform / alternating; docs/statistics.md)")
+
+
+def _coverage_case(model, noise):
+    marks = [pytest.mark.xfail(strict=True, reason=_CONSERVATIVE)] if (
+        noise == 0.10 and model in ("poisson", "compound")) else []
+    return pytest.param(model, noise, marks=marks, id=f"{model}-{noise:g}")
+
+
 @pytest.mark.slow
 @pytest.mark.physical_requirement
-@pytest.mark.parametrize("model", ["poisson", "compound", "stratified"])
-@pytest.mark.parametrize("noise", [0.10, 0.05])
+@pytest.mark.parametrize(("model", "noise"), [_coverage_case(m, n) for n in (0.10, 0.05)
+                                              for m in ("poisson", "compound", "stratified")])
 def test_coverage_under_photon_noise(model, noise):
     """1000 trials each: perfect, uniform 2 % and alternating 3 % methods, with the
     per-seed maps; the mean estimate within 3 standard errors of the exact excess;
-    coverage in 93–97 % at 5 % noise and 93–98 % at 10 %, where the model SE is
-    conservative by about 10 % (measured; docs/statistics.md)."""
+    coverage in 93-97 % (binomial SE 0.69 % at 1000 trials). Poisson and compound
+    Poisson at 10 % noise over-cover today: a known gap (strict xfail)."""
     stats = _calibrate(model, noise, 1000, which=("perfect", "uniform", "alternating"),
                        seed=10 + int(100 * noise), modes=("seeds",))
-    high = 0.97 if noise <= 0.05 else 0.98
     for name, s in stats.items():
         assert abs(s["z_mean"]) < 3.0, (name, s)
-        assert 0.93 <= s["coverage"] <= high, (name, s)
+        assert 0.93 <= s["coverage"] <= 0.97, (name, s)
