@@ -18,6 +18,10 @@ two numbers that name the same quantity differ:
   are the convergence table's rows of the plain modified estimator;
 * **the checks**: a method target on relMSE quotes the record's excess and interval.
 
+A comparison that failed (its index row says so) has a failure page and no tables: it
+is left out. A number ``metrics.json`` holds as ``null`` (strict JSON has no NaN or
+infinity) matches any non-finite text on a page.
+
 Numbers computed by the same code on the same maps agree to the last bit; the
 tolerance :data:`RELATIVE_TOLERANCE` only absorbs a CSV's text round trip.
 """
@@ -90,6 +94,18 @@ def _tables(page: Path) -> list[dict]:
     return parser.tables
 
 
+#: How a page shows a number that ``metrics.json`` holds as ``null``: strict JSON has no
+#: NaN or infinity (``scenes.files.dumps_strict``), so any non-finite value matches.
+_NOT_FINITE = frozenset({"—", "n/a", "∞", "−∞"})
+
+
+def _same_text(shown: str | None, value) -> bool:
+    """Whether a page's ``shown`` text is ``value`` as the pages print it."""
+    if value is None:
+        return shown in _NOT_FINITE
+    return shown == page_number(value)
+
+
 def _close(a, b) -> bool:
     if a is None or b is None:
         return a is None and b is None
@@ -129,18 +145,18 @@ def _page_metrics(folder: Path, data: dict) -> list[str]:
         if row is None:
             out.append(f"{folder.name}: {_key(m)} missing from the page")
             continue
-        low, high = m["excess_ci95"] or (None, None)
-        shown = {"pixels": page_number(m["pixels"]), "raw value": page_number(m["value"]),
-                 "95 % interval": ("—" if m["excess_ci95"] is None else
-                                   f"[{page_number(low)}, {page_number(high)}]")}
-        for column, text in shown.items():
-            if row.get(column) != text:
-                out.append(f"{folder.name}: {_key(m)} {column}: page {row.get(column)!r}, "
-                           f"metrics.json {text!r}")
-        excess = row.get("excess (the method's own error)", "")
-        if excess.split(" ")[0] != page_number(m["excess"]):
-            out.append(f"{folder.name}: {_key(m)} excess: page {excess!r}, metrics.json "
-                       f"{page_number(m['excess'])!r}")
+        interval = "—" if m["excess_ci95"] is None else "[{}, {}]".format(
+            *(page_number(x) for x in m["excess_ci95"]))
+        if row.get("95 % interval") != interval:
+            out.append(f"{folder.name}: {_key(m)} 95 % interval: page "
+                       f"{row.get('95 % interval')!r}, metrics.json {interval!r}")
+        excess = row.get("excess (the method's own error)", "").split(" ")[0]
+        for column, shown, value in (("pixels", row.get("pixels"), m["pixels"]),
+                                     ("raw value", row.get("raw value"), m["value"]),
+                                     ("excess", excess, m["excess"])):
+            if not _same_text(shown, value):
+                out.append(f"{folder.name}: {_key(m)} {column}: page {shown!r}, "
+                           f"metrics.json {value!r}")
     return out
 
 
@@ -189,6 +205,7 @@ def _studies(folder: Path, data: dict) -> list[str]:
     return out
 
 
+_FAILURE_ROW = re.compile(r'<tr class="fail failure">\s*<td><a href="([^"/]+)/index\.html"')
 _CLAIM_NUMBERS = re.compile(r"after 1 iteration is (\S+), after (\d+) it is (\S+) ")
 
 
@@ -263,6 +280,11 @@ def disagreements(out_dir: str | Path) -> list[str]:
         comparisons[path.parent] = json.loads(path.read_text("utf-8"))
     if not comparisons:
         return [f"{out_dir}: no comparison (no */metrics.json)"]
+    # A failed comparison (no caustic, a stage that raised) still writes metrics.json
+    # where it can, but its page is the failure's, with no tables to compare.
+    index = out_dir / "index.html"
+    failed = set(_FAILURE_ROW.findall(index.read_text("utf-8"))) if index.exists() else set()
+    comparisons = {f: d for f, d in comparisons.items() if f.name not in failed}
     out = []
     pixels: dict[tuple, dict[str, set]] = {}
     for folder, data in comparisons.items():
