@@ -40,7 +40,7 @@ from harness.cli import main
 from harness.compare.evaluate import score_value
 from harness.compare.outputs import write_comparison
 from harness.compare.pipeline import CompareOptions, default_studies, known_studies
-from harness.compare.regions import caustic_region
+from harness.compare.regions import caustic_region, scene_caustic_region
 from harness.compare.scoring import References
 from harness.compare.studies import DecompositionStudy, StudyContext
 from harness.raycast import SurfaceTracer
@@ -101,10 +101,13 @@ def glass():
         configured = PAPER.configure(scene)
         with RealtimeRunner(configured, repeats=1) as runner:
             # Through the compare pipeline's own call (quick: one repeat, no step 0;
-            # no metrics given, so the noise floor is the expected one).
+            # no metrics given, so the noise floor is the expected one). The one reference
+            # stands in for the independent one too, so the scene's region is its own.
             context = StudyContext(
                 configured, PAPER, runner.geometry, None, References(reference, reference),
-                SimpleNamespace(metrics=()), runner,
+                SimpleNamespace(metrics=(), images={
+                    "receiver0/mask_caustic": scene_caustic_region(
+                        reference.receivers[0].irradiance)}), runner,
                 CompareOptions(studies=("decomposition",), quick=True, progress=False), {})
             out["paper"] = DecompositionStudy().run(context).record
             out["paper/frame"] = render_frame(configured, ctx=runner.ctx,
