@@ -1,16 +1,30 @@
-"""Shared fixtures: paths into the repository, a minimal valid scene, and the GL
-context in the style of moderngl's own tests/conftest.py: ONE context factory for
-the session, and a ``ctx`` fixture asserting GL_NO_ERROR before and after a test."""
+"""Shared fixtures: paths into the repository, a minimal valid scene, the GL
+context in the style of moderngl's own tests/conftest.py (ONE context factory for
+the session, and a ``ctx`` fixture asserting GL_NO_ERROR before and after a test),
+the run's one headless Chromium (``chromium``, ``tests/browser.py``), and the run's
+one Mitsuba reference cache.
+
+The reference cache is content-addressed and locks per key, so one folder serves
+every test and every xdist worker: the controller makes it before the workers start
+and hands it to them (and to every subprocess) as ``$CAUSTICS_CACHE_DIR``. It is
+fresh per run, so each reference a test needs is traced once per run and no run
+trusts an earlier one's traces; ``--reference-cache DIR`` reuses DIR across runs
+instead. A test that must trace into its own cache (the cache's own tests) says why.
+"""
 
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
 from hypothesis import settings as hypothesis_settings
 
 from renderers.caustics_mapping import create_context
+from renderers.mitsuba.cache import CACHE_ENV
+from tests import browser
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -75,6 +89,14 @@ def context_factory():
     ctx.release()
 
 
+@pytest.fixture(scope="session")
+def chromium():
+    """The run's one headless Chromium (per xdist worker); modules open contexts on it."""
+    browser.require_browser()
+    with browser.launch() as instance:
+        yield instance
+
+
 @pytest.fixture
 def ctx(context_factory):
     """The session's context, asserting GL_NO_ERROR before and after the test."""
@@ -92,9 +114,35 @@ CHECK_MARKERS = {"physical_requirement": "physical requirements",
                  "regression_lock": "regression locks"}
 
 
+#: The per-run cache folder this process made (removed when the run ends).
+_OWNED_CACHE = pytest.StashKey[str]()
+
+
+def pytest_addoption(parser):
+    parser.addoption("--reference-cache", metavar="DIR", default=None,
+                     help="Mitsuba reference cache to reuse across runs (default: a "
+                          "fresh one per run, shared by every test and worker)")
+
+
 def pytest_configure(config):
     for marker, kind in CHECK_MARKERS.items():
         config.addinivalue_line("markers", f"{marker}: an accuracy check test ({kind})")
+    if hasattr(config, "workerinput"):
+        return  # an xdist worker: the controller's cache is already in the environment
+    chosen = config.getoption("--reference-cache")
+    if chosen:
+        os.environ[CACHE_ENV] = str(Path(chosen).resolve())
+    else:
+        fresh = tempfile.mkdtemp(prefix="caustics-test-references-")
+        config.stash[_OWNED_CACHE] = fresh
+        os.environ[CACHE_ENV] = fresh
+
+
+def pytest_unconfigure(config):
+    fresh = config.stash.get(_OWNED_CACHE, None)
+    if fresh is not None:
+        shutil.rmtree(fresh, ignore_errors=True)
+
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus, config):

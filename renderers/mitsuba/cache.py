@@ -58,7 +58,7 @@ from scenes.errors import HarnessError
 from scenes.geometry import build_geometry
 from scenes.model import Scene
 
-__all__ = ["CAMERA_INTEGRATORS", "FORMAT_VERSION", "STALE_AFTER", "CacheEntryError",
+__all__ = ["CACHE_ENV", "CAMERA_INTEGRATORS", "FORMAT_VERSION", "STALE_AFTER", "CacheEntryError",
            "CameraIntegratorError", "InvalidCacheEntryWarning", "cache_dir", "cache_key",
            "check_camera", "entry_lock", "load_entry", "read_result_dir", "receiver_file_name",
            "write_result_dir"]
@@ -107,11 +107,15 @@ class InvalidCacheEntryWarning(UserWarning):
     """A cache entry was invalid (corrupt, incomplete, edited) and is re-rendered."""
 
 
+#: The environment variable naming the cache root.
+CACHE_ENV = "CAUSTICS_CACHE_DIR"
+
+
 def cache_dir(override: str | Path | None = None) -> Path:
     """``override``, else ``$CAUSTICS_CACHE_DIR``, else ~/.cache/caustics-harness/reference."""
     if override is not None:
         return Path(override)
-    env = os.environ.get("CAUSTICS_CACHE_DIR")
+    env = os.environ.get(CACHE_ENV)
     if env:
         return Path(env)
     return Path.home() / ".cache" / "caustics-harness" / "reference"

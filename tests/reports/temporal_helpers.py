@@ -1,6 +1,6 @@
 """Shared by the temporal report tests: a realistic temporal record built from
 synthetic sequences by the real scoring code (``harness.studies.temporal``), a
-headless Chromium, and the checks that the page's animation decodes, plays and
+the checks that the page's animation decodes, plays and
 pauses.
 
 Synthetic sequences: a caustic (a Gaussian on a dim floor) moving 1.5 px per frame;
@@ -11,29 +11,24 @@ alternates by ±``shimmer`` of the level every frame (flicker).
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import importlib.util
 import io
-import os
 import time
 from pathlib import Path
 
 import numpy as np
-import pytest
 from PIL import Image
 
 from harness.studies.temporal import compare_sequences
 from reports.records import RecordSection, SceneComparison
 from reports.temporal_records import TemporalComparison
-from tests.reports.test_browser import CHROMIUM, CHROMIUM_ARGS, open_ready_page
+from tests.reports.test_browser import open_ready_page
 
 __all__ = [
     "FPS",
     "FRAMES",
     "check_player",
     "decode_webp",
-    "launch_browser",
     "make_temporal",
     "with_temporal",
 ]
@@ -83,31 +78,6 @@ def decode_webp(data: bytes) -> list[np.ndarray]:
         picture.seek(index)
         frames.append(np.asarray(picture.convert("RGB")))
     return frames
-
-
-@contextlib.contextmanager
-def launch_browser(profile: Path):
-    """A fresh headless Chromium (Debian's), or a skip naming what is missing (a
-    failure under CI, as in ``tests/reports/test_browser.py``)."""
-    reason = None
-    if not CHROMIUM.is_file():
-        reason = f"{CHROMIUM} not found: install Debian's chromium"
-    elif importlib.util.find_spec("playwright") is None:
-        reason = "the playwright package is missing: pip install -e .[test]"
-    if reason:
-        if os.environ.get("CI"):
-            pytest.fail(f"browser test cannot run on CI: {reason}")
-        pytest.skip(reason)
-    from playwright.sync_api import sync_playwright  # noqa: PLC0415 - only with a browser
-
-    with sync_playwright() as playwright:
-        context = playwright.chromium.launch_persistent_context(
-            str(profile), executable_path=str(CHROMIUM), args=CHROMIUM_ARGS, headless=True,
-            viewport={"width": 1400, "height": 1000}, offline=True)
-        try:
-            yield context
-        finally:
-            context.close()
 
 
 def open_page(browser, path: Path, *, init_script: str | None = None):

@@ -1,16 +1,13 @@
 """The report in a real browser: headless Chromium (Debian's ``chromium``) driven by
 Playwright, on file:// pages, linked and self-contained.
 
-Skipped with the reason when ``/usr/bin/chromium`` or ``playwright`` is missing,
-except under CI (``CI`` set), where a missing browser is a failure: ``python -m
-harness.system`` installs chromium there and the ``test`` extra installs playwright.
+The run's one Chromium (``tests/browser.py``): skipped with the reason when
+``/usr/bin/chromium`` or ``playwright`` is missing, except under CI, where that fails.
 Screenshots are written to ``test-artifacts/`` at the repository root.
 """
 
 from __future__ import annotations
 
-import importlib.util
-import os
 import time
 from pathlib import Path
 
@@ -19,44 +16,19 @@ import pytest
 
 from harness.metrics import tonemap
 from reports import build_report, scene_folder
+from tests.browser import new_context
 from tests.conftest import REPO
 from tests.reports.conftest import HOSTILE_DESCRIPTION, HOSTILE_NAME
 from tests.reports.data_helpers import page_layers
 
-CHROMIUM = Path("/usr/bin/chromium")
 ARTIFACTS = REPO / "test-artifacts"
-CHROMIUM_ARGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-]
-
-
-def _missing() -> str | None:
-    if not CHROMIUM.is_file():
-        return (f"{CHROMIUM} not found: install Debian's chromium (as root: "
-                "python -m harness.system, or apt-get install -y chromium)")
-    if importlib.util.find_spec("playwright") is None:
-        return "the playwright package is missing: pip install -e .[test]"
-    return None
 
 
 @pytest.fixture(scope="module")
-def browser(tmp_path_factory):
-    """A fresh headless Chromium (new user-data-dir), closed after the module."""
-    reason = _missing()
-    if reason:
-        if os.environ.get("CI"):
-            pytest.fail(f"browser test cannot run on CI: {reason}")
-        pytest.skip(reason)
-    from playwright.sync_api import sync_playwright  # noqa: PLC0415
-
-    with sync_playwright() as playwright:
-        context = playwright.chromium.launch_persistent_context(
-            str(tmp_path_factory.mktemp("chromium-profile")), executable_path=str(CHROMIUM),
-            args=CHROMIUM_ARGS, headless=True, viewport={"width": 1400, "height": 1000},
-            offline=True)
+def browser(chromium):
+    """A fresh browser context on the run's one Chromium, closed after the module."""
+    with new_context(chromium) as context:
         yield context
-        context.close()
 
 
 @pytest.fixture(scope="module")

@@ -27,9 +27,9 @@ from reports import build_report, images, page_data
 from reports.display import LUMA
 from reports.page_data import BLOB_FOLDER, RELATIVE_BOUND
 from reports.profiles import line_pixels
+from tests.browser import new_context
 from tests.conftest import REPO
 from tests.reports.data_helpers import blob_payload, page_layers
-from tests.reports.temporal_helpers import launch_browser
 from tests.reports.test_browser import open_ready_page
 
 ARTIFACTS = REPO / "test-artifacts"
@@ -75,8 +75,8 @@ def exr(pages):
 
 
 @pytest.fixture(scope="module")
-def browser(tmp_path_factory):
-    with launch_browser(tmp_path_factory.mktemp("chromium-profile")) as context:
+def browser(chromium):
+    with new_context(chromium) as context:
         yield context
 
 

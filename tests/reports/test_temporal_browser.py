@@ -12,13 +12,13 @@ from __future__ import annotations
 import pytest
 
 from reports import build_report, scene_folder
+from tests.browser import new_context
 from tests.conftest import REPO
 from tests.reports.conftest import make_comparison
 from tests.reports.temporal_helpers import (
     FPS,
     check_player,
     decode_webp,
-    launch_browser,
     make_temporal,
     open_page,
     with_temporal,
@@ -28,8 +28,8 @@ ARTIFACTS = REPO / "test-artifacts"
 
 
 @pytest.fixture(scope="module")
-def browser(tmp_path_factory):
-    with launch_browser(tmp_path_factory.mktemp("chromium-profile")) as context:
+def browser(chromium):
+    with new_context(chromium) as context:
         yield context
 
 

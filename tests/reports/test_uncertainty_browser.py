@@ -34,7 +34,7 @@ from reports.display import CLIP_ABOVE, CLIP_BELOW, LUMA, difference_range, fals
 from reports.page_data import RELATIVE_BOUND
 from reports.panels import MAP_COLORMAPS, Z_LIMIT, Z_REPORTED
 from reports.records import EqualErrorSpeedup, SpeedupWithheld
-from tests.reports.temporal_helpers import launch_browser
+from tests.browser import new_context
 from tests.reports.test_browser import PageLog, open_ready_page
 
 KINDS = ("method", "reference", "signed", "ssim", "flip")
@@ -135,8 +135,8 @@ def exr(reports, scene):
 
 
 @pytest.fixture(scope="module")
-def browser(tmp_path_factory):
-    with launch_browser(tmp_path_factory.mktemp("chromium-profile")) as context:
+def browser(chromium):
+    with new_context(chromium) as context:
         yield context
 
 

@@ -21,8 +21,9 @@ import pytest
 
 from harness.cli import main
 from harness.studies.temporal import COLUMNS
+from tests.browser import new_context
 from tests.conftest import SCENES
-from tests.reports.temporal_helpers import check_player, decode_webp, launch_browser, open_page
+from tests.reports.temporal_helpers import check_player, decode_webp, open_page
 
 FRAMES = 6
 SMALL = ["--set", "photons=100000", "--set", "seeds=2", "--set", "spp=2",
@@ -117,7 +118,7 @@ def test_frames_needs_the_temporal_study(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
-def test_the_real_animation_plays_in_chromium(run, tmp_path_factory):
+def test_the_real_animation_plays_in_chromium(run, chromium):
     """The strong preset's page of the run above in headless Chromium: the player
     decodes the real animation's 6 frames, plays, pauses, steps through exactly the
     file's frames; no console error, no request off the machine."""
@@ -125,7 +126,7 @@ def test_the_real_animation_plays_in_chromium(run, tmp_path_factory):
     assert code == 0
     folder = out / "water_pool-strong"
     frames = decode_webp((folder / "temporal_receiver0.webp").read_bytes())
-    with launch_browser(tmp_path_factory.mktemp("chromium-profile")) as browser:
+    with new_context(chromium) as browser:
         page, log = open_page(browser, folder / "index.html")
         check_player(page, frames, fps=30.0)
         log.assert_clean()
