@@ -7,8 +7,8 @@ float32 positions, vertex normals, faces and, for receivers, (u, v) texture coor
 that both renderers receive). So the XML and the reference cannot drift apart: there is
 no second mapping.
 
-* Shapes keep the ids ``receiver_<i>`` and ``object_<i>`` (``id`` and ``name``), indexed
-  like the scene's lists.
+* Objects keep the dict's keys as ids (``id`` and ``name``): shapes ``receiver_<i>`` and
+  ``object_<i>``, indexed like the scene's lists, ``light``, ``sensor``, ``integrator``.
 * Dielectrics are the ``chain_dielectric`` BSDF (:mod:`.bsdf`: Fresnel only when the
   scene asks, Beer-Lambert absorption on exit), a Python plugin: a process loads the XML
   after registering it (:func:`load_scene_xml` does; any other Mitsuba 3 process does so
@@ -44,6 +44,8 @@ __all__ = ["CHANNEL_FILES", "load_scene_xml", "write_scene_xml"]
 #: The files of a dispersion scene's channel passes (0, 1, 2 = red, green, blue).
 CHANNEL_FILES = {None: "scene.xml", 0: "scene_r.xml", 1: "scene_g.xml", 2: "scene_b.xml"}
 _STAND_IN = "dielectric"
+#: Top-level XML elements that are scene objects (``<default>`` is a parameter).
+_OBJECTS = {"shape", "emitter", "sensor", "integrator"}
 
 
 def _stand_in(value):
@@ -66,10 +68,11 @@ def _write(mi, variant: str, desc: dict, path: Path) -> None:
             node.props = props
     mi.parser.write_file(state, str(path))
     # Mitsuba's writer names top-level objects (``name=``) but gives them no ``id``, which
-    # is what a loaded shape's id() returns: add it, as the dict's key.
+    # is what a loaded object's id() returns (and mi.traverse's keys): add it, as the
+    # dict's key.
     tree = ElementTree.parse(path)
     for element in tree.getroot():
-        if element.tag == "shape":
+        if element.tag in _OBJECTS and element.get("name") is not None:
             element.set("id", element.get("name"))
     tree.write(path, encoding="unicode")
 
