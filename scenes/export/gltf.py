@@ -8,7 +8,8 @@ in short:
   shading normals both renderers use; receivers also TEXCOORD_0, their (u, v) scaled to
   [0, 1] over the map's extent, t = 0 at vmin = the map's row 0), in glTF coordinates
   (:mod:`scenes.export.frames`), analytic shapes within the chord tolerance
-  (:mod:`scenes.export.tessellation`);
+  (:mod:`scenes.export.tessellation`); receivers are one-sided (the harness counts
+  light on their front side only), open objects two-sided;
 * diffuse (receivers, diffuse objects): base colour = albedo, metallic 0, roughness 1;
   dielectric: ``KHR_materials_transmission`` (1), ``KHR_materials_ior`` (the IOR, the
   green channel's when it has one per channel), ``KHR_materials_volume`` on closed
@@ -24,7 +25,8 @@ in short:
 Every node, material and light carries ``extras.harness``: the scene's exact values
 (frame-free numbers such as IORs per channel, absorption, the Fresnel switch, a spot's
 falloff; vectors in glTF coordinates) where an extension holds only an approximation,
-so that a scene read back from the file loses nothing the harness renders.
+so that a scene read back from the file keeps the values the harness renders with (the
+exceptions, such as the renderer settings, are listed in ``docs/export.md``).
 """
 
 from __future__ import annotations

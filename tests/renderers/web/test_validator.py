@@ -17,6 +17,7 @@ from renderers.web.validator import ValidatorError, unavailable_reason, validate
 from scenes import load_scene
 from scenes.export import export_gltf
 from tests.conftest import SCENES
+from tests.scenes.export.scenes import area_light_scene
 
 #: Every bundled scene (paper scenes, hard cases and their sub-folders; not sweeps).
 BUNDLED = sorted(p for p in SCENES.rglob("*.toml") if "sweeps" not in p.parts)
@@ -52,3 +53,10 @@ def test_validator_reports_a_broken_file(tmp_path):
     (tmp_path / "junk.glb").write_bytes(b"not a glTF file")
     with pytest.raises(ValidatorError, match="could not detect glTF format"):
         validate_gltf(tmp_path / "junk.glb")
+
+
+@pytest.mark.usefixtures("validator")
+def test_an_area_light_scene_is_valid(tmp_path):
+    """No bundled scene has an area light: the emissive rectangle it becomes validates."""
+    report = validate_gltf(export_gltf(area_light_scene(), tmp_path / "area.glb").path)
+    assert (report.errors, report.warnings) == (0, 0), report.describe()

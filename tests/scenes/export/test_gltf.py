@@ -21,6 +21,7 @@ from scenes.camera import pinhole_directions
 from scenes.export import GLTF_FROM_SCENE, UNITS, export_gltf
 from scenes.export.tessellation import sphere_chord_error
 from scenes.geometry import build_geometry
+from tests.scenes.export.scenes import area_light_scene
 
 _COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
 
@@ -296,3 +297,23 @@ def test_axes_are_stated_and_y_is_up(tmp_path):
     assert accessor.min == [-4.0, 0.0, -4.0] and accessor.max == [4.0, 0.0, 4.0]
     assert sphere_chord_error(1.0, 5) < read.gltf.asset.extras["harness"]["tessellation"][
         "tolerance_m"]
+
+
+def test_area_light_is_an_emissive_rectangle(tmp_path):
+    """The rectangle's corners at centre +- half its sides, facing the normal (its faces
+    wound counter-clockwise seen from below), radiance = intensity / area as emissive
+    colour x strength (W m^-2 sr^-1)."""
+    scene = area_light_scene()
+    _, _, read = _export(tmp_path, "glass_sphere", scene=scene)
+    mesh = read.mesh("light")
+    p = mesh["positions"].astype(np.float64)
+    np.testing.assert_allclose(p.mean(axis=0), scene.light.center, atol=1e-6)
+    assert sorted(np.ptp(p, axis=0)) == pytest.approx([0.0, 0.25, 0.5], abs=1e-6)
+    a, b, c = (p[mesh["faces"][:, k]] for k in range(3))
+    facing = np.cross(b - a, c - a) @ np.asarray(scene.light.normal)
+    assert np.all(facing > 0)
+    material = mesh["material"]
+    radiance = np.multiply(material.emissiveFactor, material.extensions[
+        "KHR_materials_emissive_strength"]["emissiveStrength"])
+    np.testing.assert_allclose(radiance, np.array([30.0, 20.0, 10.0]) / 0.125, rtol=1e-12)
+    assert "KHR_lights_punctual" not in (read.gltf.extensions or {})
