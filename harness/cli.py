@@ -187,6 +187,36 @@ def _compare_command(subparsers) -> None:
     _cache_options(p)
 
 
+def _positive_metres(text: str) -> float:
+    """``--tolerance``: a positive, finite number of metres."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of metres, got {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number of metres, got {text}")
+    return value
+
+
+def _export_command(subparsers) -> None:
+    p = _command(subparsers, "export", "harness.commands.export:export",
+                 "write a scene for a renderer outside the harness: glTF 2.0 or Mitsuba 3 "
+                 "XML (docs/export.md)", output_dir=True)
+    p.add_argument("scene", nargs="?", metavar="SCENE", help=_SCENES_HELP)
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--format", choices=("gltf", "mitsuba"), default="gltf",
+                   help="gltf: DIR/<scene>.glb (KHR lights and materials, a camera per "
+                   "receiver); mitsuba: DIR/scene.xml and DIR/meshes/*.ply, the reference's "
+                   "own Mitsuba scene (default %(default)s)")
+    p.add_argument("--gltf-container", choices=("glb", "gltf"), default="glb",
+                   help="one binary .glb, or a .gltf with its .bin beside it "
+                   "(default %(default)s)")
+    p.add_argument("--tolerance", type=_positive_metres, metavar="METRES",
+                   help="largest chord error of analytic shapes (spheres, rings) in the "
+                   "glTF, in metres (default: 1e-4 of the diagonal of the scene's bounding "
+                   "box; never coarser than the scene's own tessellation)")
+
+
 def _figures_command(subparsers) -> None:
     p = _command(subparsers, "figures", "harness.commands.figures:figures",
                  "regenerate the paper's figures with their data", output_dir=True)
@@ -274,7 +304,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="print the traceback of an internal error (also CAUSTICS_DEBUG=1)")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for group in (_scene_commands, _render_commands, _compare_command, _figures_command,
-                  _crosscheck_command, _check_commands, _sweep_command):
+                  _crosscheck_command, _check_commands, _sweep_command, _export_command):
         group(subparsers)
     return parser
 

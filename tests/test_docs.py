@@ -38,8 +38,10 @@ CITATION = re.compile(
 #: Where a citation may not appear: product code, tests, docs and build files.
 CITED_ROOTS = ("harness", "renderers", "reports", "scenes", "tests", "docs", ".ci")
 CITED_FILES = ("README.md", "tox.ini", "pyproject.toml")
-TEXT_SUFFIXES = {".py", ".glsl", ".toml", ".md", ".ini", ".js", ".css", ".html", ".j2",
-                 ".txt", ".json", ".csv", ".cfg", ".sh", ""}
+TEXT_SUFFIXES = {".py", ".glsl", ".toml", ".md", ".ini", ".js", ".mjs", ".css", ".html",
+                 ".j2", ".txt", ".json", ".csv", ".cfg", ".sh", ""}
+#: Folders of installed third-party files (npm's), not the product's own.
+INSTALLED = {"__pycache__", "node_modules"}
 
 
 def _outside_fences(text: str) -> list[str]:
@@ -130,7 +132,7 @@ def test_a_broken_link_is_caught(tmp_path):
 def _cited_files():
     for root in CITED_ROOTS:
         for path in sorted((REPO / root).rglob("*")):
-            if path.is_file() and "__pycache__" not in path.parts \
+            if path.is_file() and not INSTALLED & set(path.parts) \
                     and path.suffix in TEXT_SUFFIXES and path != Path(__file__).resolve():
                 yield path
     for name in CITED_FILES:

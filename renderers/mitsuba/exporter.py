@@ -18,6 +18,7 @@ Materials
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,6 +45,8 @@ __all__ = [
     "channel_mask",
     "emitter_dicts",
     "export_scene",
+    "exported",
+    "scene_dict",
     "sensor_dict",
 ]
 
@@ -190,6 +193,64 @@ def _mesh(mi, name: str, mesh: TriangleMesh, bsdf: dict, *, texcoords: bool):
     return out
 
 
+def scene_dict(
+    scene: Scene,
+    *,
+    geometry: SceneGeometry | None = None,
+    channel: int | None = None,
+    tir_reflects: bool = False,
+    include_objects: bool = True,
+    sensor: dict | None = None,
+    integrator: dict | None = None,
+    shape: Callable[[str, TriangleMesh, dict, bool], object] | None = None,
+) -> dict:
+    """The Mitsuba scene description of ``scene`` (what :func:`export_scene` loads).
+
+    Shapes are the dict's ``receiver_<i>`` and ``object_<i>`` entries, each made by
+    ``shape(name, mesh, bsdf, texcoords)`` (default: an ``mi.Mesh`` of the triangles);
+    the other parameters are :func:`export_scene`'s.
+    """
+    mi, _, _ = _mi.load()
+    if shape is None:
+        def shape(name, mesh, bsdf, texcoords):
+            return _mesh(mi, name, mesh, bsdf, texcoords=texcoords)
+    geometry = geometry or build_geometry(scene)
+    desc: dict = {"type": "scene"}
+    desc["integrator"] = integrator or {"type": "ptracer"}
+    desc["sensor"] = sensor or sensor_dict(scene.camera)
+    desc.update(emitter_dicts(scene.light, channel=channel))
+    for i, rec in enumerate(geometry.receivers):
+        desc[f"receiver_{i}"] = shape(
+            f"receiver_{i}", rec.mesh,
+            {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(rec.albedo)}},
+            True,
+        )
+    if include_objects:
+        for i, obj in enumerate(geometry.objects):
+            desc[f"object_{i}"] = shape(
+                f"object_{i}", obj.mesh,
+                bsdf_dict(obj.material, channel=channel, tir_reflects=tir_reflects), False,
+            )
+    return desc
+
+
+def exported(loaded, *, receivers: int, objects: int) -> ExportedScene:
+    """An ``mi.Scene`` whose shapes have the ids ``receiver_<i>`` and ``object_<i>``
+    (:func:`scene_dict`'s), with their registry ids.
+
+    Raises
+    ------
+    KeyError
+        A receiver or object the counts name is not among the scene's shapes.
+    """
+    mi, dr, _ = _mi.load()
+    ids = {}
+    for item in loaded.shapes():
+        ids[item.id()] = int(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(item))[0])
+    return ExportedScene(loaded, tuple(ids[f"receiver_{i}"] for i in range(receivers)),
+                         tuple(ids[f"object_{i}"] for i in range(objects)))
+
+
 def export_scene(
     scene: Scene,
     *,
@@ -214,30 +275,9 @@ def export_scene(
     sensor, integrator
         Mitsuba dicts; default the scene camera and a plain ``ptracer``.
     """
-    mi, dr, _ = _mi.load()
+    mi, _, _ = _mi.load()
     geometry = geometry or build_geometry(scene)
-    desc: dict = {"type": "scene"}
-    desc["integrator"] = integrator or {"type": "ptracer"}
-    desc["sensor"] = sensor or sensor_dict(scene.camera)
-    desc.update(emitter_dicts(scene.light, channel=channel))
-    for i, rec in enumerate(geometry.receivers):
-        desc[f"receiver_{i}"] = _mesh(
-            mi, f"receiver_{i}", rec.mesh,
-            {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(rec.albedo)}},
-            texcoords=True,
-        )
-    if include_objects:
-        for i, obj in enumerate(geometry.objects):
-            desc[f"object_{i}"] = _mesh(
-                mi, f"object_{i}", obj.mesh,
-                bsdf_dict(obj.material, channel=channel, tir_reflects=tir_reflects),
-                texcoords=False,
-            )
-    loaded = mi.load_dict(desc)
-    ids = {}
-    for shape in loaded.shapes():
-        ids[shape.id()] = int(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(shape))[0])
-    receiver_ids = tuple(ids[f"receiver_{i}"] for i in range(len(geometry.receivers)))
-    object_ids = tuple(ids[f"object_{i}"] for i in range(len(geometry.objects))
-                       ) if include_objects else ()
-    return ExportedScene(loaded, receiver_ids, object_ids)
+    desc = scene_dict(scene, geometry=geometry, channel=channel, tir_reflects=tir_reflects,
+                      include_objects=include_objects, sensor=sensor, integrator=integrator)
+    return exported(mi.load_dict(desc), receivers=len(geometry.receivers),
+                    objects=len(geometry.objects) if include_objects else 0)

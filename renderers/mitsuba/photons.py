@@ -302,12 +302,18 @@ class PhotonTracer:
         Tally where each photon's weight went (``PhotonSums.budget``; the module
         docstring's "Flux budget"). Needs ``caustic_only``. The maps are the same
         with or without it.
+    loaded : dict, optional
+        The Mitsuba scenes to trace on, one per channel pass (key None, or 0, 1, 2 with
+        the ``dispersion`` effect), as :func:`~.exporter.exported` gives them (a scene
+        read back from exported XML); default :func:`~.exporter.export_scene` of each
+        pass. Light, materials and chains still come from ``scene``.
     """
 
     def __init__(self, scene: Scene, *, geometry: SceneGeometry | None = None,
                  resolution: tuple[int, int] | None = None,
                  extents: list | None = None, caustic_only: bool = False,
-                 shading_correction: bool = True, budget: bool = False) -> None:
+                 shading_correction: bool = True, budget: bool = False,
+                 loaded: dict | None = None) -> None:
         _, _, variant = _mi.load()
         if not variant.startswith(("llvm", "cuda")):
             raise _mi.MitsubaError(
@@ -326,7 +332,10 @@ class PhotonTracer:
         self.shading_correction = bool(shading_correction)
         dispersion = "dispersion" in self.effects
         self.channels = [0, 1, 2] if dispersion else [None]
-        self.exported: dict = {
+        if loaded is not None and set(loaded) != set(self.channels):
+            raise ValueError(f"loaded scenes for passes {sorted(loaded, key=str)}, the scene "
+                             f"has passes {self.channels}")
+        self.exported: dict = dict(loaded) if loaded is not None else {
             c: export_scene(scene, geometry=self.geometry, channel=c) for c in self.channels
         }
         info = scene.info

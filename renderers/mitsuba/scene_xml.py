@@ -1,0 +1,119 @@
+"""Scene -> Mitsuba 3 XML: the reference's own scene description, written to files.
+
+The XML is :func:`~.exporter.scene_dict` (the dict the reference loads) serialised by
+Mitsuba's own writer (``mi.parser.parse_dict`` + ``mi.parser.write_file``), with each
+receiver and object as a PLY file beside it (``meshes/receiver_<i>.ply``: the same
+float32 positions, vertex normals, faces and, for receivers, (u, v) texture coordinates
+that both renderers receive). So the XML and the reference cannot drift apart: there is
+no second mapping.
+
+* Objects keep the dict's keys as ids (``id`` and ``name``): shapes ``receiver_<i>`` and
+  ``object_<i>``, indexed like the scene's lists, ``light``, ``sensor``, ``integrator``.
+* Dielectrics are the ``chain_dielectric`` BSDF (:mod:`.bsdf`: Fresnel only when the
+  scene asks, Beer-Lambert absorption on exit), a Python plugin: a process loads the XML
+  after registering it (:func:`load_scene_xml` does; any other Mitsuba 3 process does so
+  with ``renderers.mitsuba.bsdf.register(mi, dr)``, or swaps in a stock ``dielectric``
+  with ``int_ior`` = ``eta``, which always weights by Fresnel).
+* Dispersion (an IOR per channel) is one file per channel pass, ``scene_r.xml``,
+  ``scene_g.xml``, ``scene_b.xml``, as the reference renders it: each with that
+  channel's IOR and the light's power in that channel only; their sum is the scene.
+  Otherwise one file, ``scene.xml``.
+* The sensor is the scene camera, the integrator a plain ``ptracer``; units are the
+  reference's (W/sr, W/m^2, radiance W m^-2 sr^-1).
+
+Mitsuba's parser does not know a Python plugin's object type, so the writer is handed a
+stock ``dielectric`` in its place and the plugin's name is put back on those nodes
+before writing (each is recognised by its ``tir_reflects`` property, which only
+``chain_dielectric`` has).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from xml.etree import ElementTree
+
+from renderers.mitsuba import _mi
+from renderers.mitsuba.bsdf import BSDF_NAME
+from renderers.mitsuba.exporter import ExportedScene, _mesh, exported, scene_dict
+from scenes import effects_of
+from scenes.geometry import build_geometry
+from scenes.model import Scene
+
+__all__ = ["CHANNEL_FILES", "load_scene_xml", "write_scene_xml"]
+
+#: The files of a dispersion scene's channel passes (0, 1, 2 = red, green, blue).
+CHANNEL_FILES = {None: "scene.xml", 0: "scene_r.xml", 1: "scene_g.xml", 2: "scene_b.xml"}
+_STAND_IN = "dielectric"
+#: Top-level XML elements that are scene objects (``<default>`` is a parameter).
+_OBJECTS = {"shape", "emitter", "sensor", "integrator"}
+
+
+def _stand_in(value):
+    """``value`` with every ``chain_dielectric`` dict typed as a stock dielectric."""
+    if isinstance(value, dict):
+        out = {k: _stand_in(v) for k, v in value.items()}
+        if out.get("type") == BSDF_NAME:
+            out["type"] = _STAND_IN
+        return out
+    return value
+
+
+def _write(mi, variant: str, desc: dict, path: Path) -> None:
+    config = mi.parser.ParserConfig(variant)
+    state = mi.parser.parse_dict(config, _stand_in(desc))
+    for node in state.nodes:
+        props = node.props
+        if props.plugin_name() == _STAND_IN and "tir_reflects" in props:
+            props.set_plugin_name(BSDF_NAME)
+            node.props = props
+    mi.parser.write_file(state, str(path))
+    # Mitsuba's writer names top-level objects (``name=``) but gives them no ``id``, which
+    # is what a loaded object's id() returns (and mi.traverse's keys): add it, as the
+    # dict's key.
+    tree = ElementTree.parse(path)
+    for element in tree.getroot():
+        if element.tag in _OBJECTS and element.get("name") is not None:
+            element.set("id", element.get("name"))
+    tree.write(path, encoding="unicode")
+
+
+def write_scene_xml(scene: Scene, folder: str | Path) -> tuple[Path, ...]:
+    """Write ``scene`` as Mitsuba 3 XML into ``folder`` (created if missing).
+
+    Returns
+    -------
+    tuple of Path
+        ``scene.xml``, or the three channel passes of a dispersion scene
+        (:data:`CHANNEL_FILES`); the meshes are under ``meshes/`` beside them.
+    """
+    mi, _, variant = _mi.load()
+    folder = Path(folder)
+    (folder / "meshes").mkdir(parents=True, exist_ok=True)
+    geometry = build_geometry(scene)
+
+    def ply(name, mesh, bsdf, texcoords):
+        relative = f"meshes/{name}.ply"
+        _mesh(mi, name, mesh, bsdf, texcoords=texcoords).write_ply(str(folder / relative))
+        return {"type": "ply", "filename": relative, "bsdf": bsdf}
+
+    channels = [0, 1, 2] if "dispersion" in effects_of(scene) else [None]
+    written = []
+    for channel in channels:
+        desc = scene_dict(scene, geometry=geometry, channel=channel, shape=ply)
+        path = folder / CHANNEL_FILES[channel]
+        _write(mi, variant, desc, path)
+        written.append(path)
+    return tuple(written)
+
+
+def load_scene_xml(path: str | Path, *, receivers: int, objects: int) -> ExportedScene:
+    """Load an XML file :func:`write_scene_xml` wrote (the ``chain_dielectric`` plugin
+    registered first), with its shapes' registry ids.
+
+    Raises
+    ------
+    KeyError
+        A receiver or object the counts name is missing from the file.
+    """
+    mi, _, _ = _mi.load()
+    return exported(mi.load_file(str(path)), receivers=receivers, objects=objects)
