@@ -138,6 +138,19 @@ def pytest_configure(config):
         os.environ[CACHE_ENV] = fresh
 
 
+def pytest_collection_modifyitems(config, items):
+    """Under xdist's ``--dist loadgroup``, each test module runs on one worker (its
+    module fixtures are built once), and every test that uses the browser runs on
+    the same worker (with the rest of its module), so the run starts one Chromium."""
+    browser_modules = {item.module.__name__ for item in items
+                       if "chromium" in item.fixturenames}
+    for item in items:
+        if item.get_closest_marker("xdist_group") is None:
+            module = item.module.__name__
+            group = "browser" if module in browser_modules else module
+            item.add_marker(pytest.mark.xdist_group(group))
+
+
 def pytest_unconfigure(config):
     fresh = config.stash.get(_OWNED_CACHE, None)
     if fresh is not None:
