@@ -3,8 +3,10 @@
 Library code raises typed errors; only this module turns them into exit codes and
 one-line messages. It imports nothing heavy: each subcommand names its handler as
 ``"module:function"`` and the module is imported only when that subcommand runs, so
-``caustics --help`` and ``caustics validate`` never load Mitsuba, Dr.Jit, moderngl,
-matplotlib or playwright.
+``caustics --help``, ``setup``, ``schema``, ``describe`` and ``validate --no-trace``
+never load Mitsuba, Dr.Jit, moderngl, matplotlib or playwright (plain ``validate``
+loads Mitsuba for its caustic probe, a small photon trace). Only ``setup`` installs
+system packages.
 
 Exit codes (:data:`EXIT_CODES`): 0 done; 1 bad input or a failure the harness
 detected (a scene error, an unwritable ``-o``, a refused file, a scene whose
@@ -58,6 +60,15 @@ def _command(subparsers, name: str, handler: str, help_text: str, *,
     parser = subparsers.add_parser(name, help=help_text, parents=[_common()])
     parser.set_defaults(handler=handler, output_dir=output_dir)
     return parser
+
+
+def _setup_command(subparsers) -> None:
+    p = _command(subparsers, "setup", "harness.commands.setup:setup",
+                 "find, and as root install, the system packages the harness needs "
+                 "(Debian's libllvm19 for Mitsuba's CPU variant, chromium for the "
+                 "report's browser test); nothing else ever installs them")
+    p.add_argument("--check", action="store_true",
+                   help="only look for them and say what is missing; install nothing")
 
 
 def _scene_commands(subparsers) -> None:
@@ -303,8 +314,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true",
                         help="print the traceback of an internal error (also CAUSTICS_DEBUG=1)")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for group in (_scene_commands, _render_commands, _compare_command, _figures_command,
-                  _crosscheck_command, _check_commands, _sweep_command, _export_command):
+    for group in (_setup_command, _scene_commands, _render_commands, _compare_command,
+                  _figures_command, _crosscheck_command, _check_commands, _sweep_command,
+                  _export_command):
         group(subparsers)
     return parser
 

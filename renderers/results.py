@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CAUSTIC_FRACTION", "LUMA", "ReceiverMap", "RenderResult", "caustic_region",
+from scenes.colour import luminance
+
+__all__ = ["CAUSTIC_FRACTION", "ReceiverMap", "RenderResult", "caustic_region",
            "texel_centers"]
 
-#: Rec. 709 luminance weights of linear RGB (the report's luminance uses the same).
-LUMA = np.array([0.2126, 0.7152, 0.0722])
 #: A texel is in the caustic region when the reference's luminance exceeds this
 #: fraction of its 99.5th percentile (a robust maximum that ignores fireflies).
 CAUSTIC_FRACTION = 0.1
@@ -95,10 +95,10 @@ def caustic_region(reference: np.ndarray, *, fraction: float = CAUSTIC_FRACTION)
     the region the Mitsuba reference measures its own noise over.
 
     The threshold is ``fraction`` x the 99.5th percentile of the luminance
-    (:data:`LUMA`); an all-black reference gives an empty mask.
+    (:func:`scenes.colour.luminance`, Rec. 709); an all-black reference gives an
+    empty mask.
     """
-    image = np.asarray(reference, np.float64)
-    lum = image if image.ndim == 2 else image @ LUMA
+    lum = luminance(reference)
     top = float(np.percentile(lum, 99.5))
     if top <= 0:
         return np.zeros(lum.shape, bool)

@@ -1,16 +1,9 @@
-"""Display transforms: tone mapping (for SSIM and previews) and false colour.
+"""Display transforms of the report: the difference maps' scale and false colour.
 
-Tone mapping is for metrics that must not see linear HDR (SSIM) and for previews.
+Luminance and the tone curve (for SSIM and previews) are :mod:`scenes.colour`'s, the
+one place the metrics, the renderers and the report take them from.
 
-The map is fixed per comparison, chosen from the reference alone, so that both the
-real-time image and the reference go through exactly the same curve:
-
-    t(x) = srgb( k x / (1 + k x) ),   k = 1 / white,
-
-a Reinhard curve with white point ``white`` (W m⁻² sr⁻¹ or W/m²), followed by the
-sRGB transfer function. Output is in [0, 1], so SSIM's ``data_range`` is 1.
-
-The difference maps' scale is fixed per scene from the reference alone too
+The difference maps' scale is fixed per scene from the reference alone
 (:func:`difference_range`): ± :data:`DIFF_RANGE_FRACTION` of the reference's
 :data:`DIFF_RANGE_PERCENTILE` th-percentile luminance, so every method of a scene is
 drawn on one scale, known before any method has rendered. False colour marks what
@@ -22,12 +15,11 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["CLIP_ABOVE", "CLIP_BELOW", "DIFF_RANGE_FRACTION", "DIFF_RANGE_PERCENTILE",
-           "DIFF_RANGE_RULE", "MARKED_LEVELS", "UNDEFINED", "difference_range", "false_colour",
-           "luminance", "srgb_encode", "tonemap", "white_point"]
+from scenes.colour import white_point
 
-#: Rec. 709 luma weights for linear RGB.
-LUMA = np.array([0.2126, 0.7152, 0.0722])
+__all__ = ["CLIP_ABOVE", "CLIP_BELOW", "DIFF_RANGE_FRACTION", "DIFF_RANGE_PERCENTILE",
+           "DIFF_RANGE_RULE", "MARKED_LEVELS", "UNDEFINED", "difference_range", "false_colour"]
+
 #: The difference scale is ± this fraction of the reference's robust maximum luminance.
 DIFF_RANGE_FRACTION = 0.25
 #: The reference's robust maximum: this percentile of its luminance (the top 0.5 % of
@@ -46,47 +38,14 @@ UNDEFINED = (128, 128, 128)
 MARKED_LEVELS = 256 - 3
 
 
-def luminance(image: np.ndarray) -> np.ndarray:
-    """Linear luminance of an (H, W, 3) image; (H, W) input is returned as is."""
-    image = np.asarray(image, np.float64)
-    return image if image.ndim == 2 else image @ LUMA
-
-
-def white_point(reference: np.ndarray, *, mask: np.ndarray | None = None,
-                percentile: float = 99.0) -> float:
-    """The reference's ``percentile`` luminance inside ``mask``: the tone curve's white.
-
-    Falls back to 1.0 for an all-black reference, so the curve stays defined.
-    """
-    lum = luminance(reference)
-    values = lum[mask] if mask is not None else lum.ravel()
-    values = values[np.isfinite(values)]
-    white = float(np.percentile(values, percentile)) if values.size else 0.0
-    return white if white > 0 else 1.0
-
-
 def difference_range(reference: np.ndarray, *, mask: np.ndarray | None = None) -> float:
     """The symmetric limit of a scene's difference maps (same units as ``reference``):
     :data:`DIFF_RANGE_FRACTION` × the reference's :data:`DIFF_RANGE_PERCENTILE` th-
-    percentile luminance inside ``mask`` (:func:`white_point`; an all-black reference
+    percentile luminance inside ``mask`` (:func:`scenes.colour.white_point`; an all-black reference
     gives 0.25, so the colour bar stays defined). A function of the reference alone,
     so every method of a scene gets the same scale."""
     return DIFF_RANGE_FRACTION * white_point(reference, mask=mask,
                                              percentile=DIFF_RANGE_PERCENTILE)
-
-
-def srgb_encode(linear: np.ndarray) -> np.ndarray:
-    """The sRGB transfer function (IEC 61966-2-1) on values in [0, 1]."""
-    x = np.clip(linear, 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-
-
-def tonemap(image: np.ndarray, *, white: float) -> np.ndarray:
-    """Reinhard with white point ``white``, then sRGB: values in [0, 1], float64."""
-    if not white > 0:
-        raise ValueError(f"white point must be positive, got {white}")
-    x = np.maximum(np.asarray(image, np.float64), 0.0) / white
-    return srgb_encode(x / (1.0 + x))
 
 
 def false_colour(values: np.ndarray, *, vmin: float, vmax: float,

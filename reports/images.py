@@ -1,9 +1,9 @@
 """Pixels for the report: PNG encoding, RGBE-packed HDR previews, false-colour maps,
 colour bars and thumbnails.
 
-Tone mapping and false colour are not reimplemented here: they come from
-``harness.metrics`` (:func:`~reports.display`,
-:func:`~harness.metrics.false_colour`), so the report shows exactly the curve the
+Tone mapping and false colour are not reimplemented here: the tone curve is
+:func:`scenes.colour.tonemap`, the one the metrics use for SSIM, and false colour
+:func:`reports.display.false_colour`, so the report shows exactly the curve the
 metrics used.
 
 HDR previews for the exposure control are shipped to the browser as one RGB PNG
@@ -26,7 +26,8 @@ import io
 import numpy as np
 from PIL import Image
 
-from reports.display import false_colour, luminance, tonemap
+from reports.display import false_colour
+from scenes.colour import luminance, tonemap
 
 __all__ = [
     "colour_bar_png",
@@ -141,7 +142,7 @@ def decode_rgbe_stack(stack: np.ndarray) -> np.ndarray:
 
 
 def tonemapped_png(image: np.ndarray, *, white: float) -> bytes:
-    """PNG of ``reports.display(image, white=white)`` (Reinhard + sRGB)."""
+    """PNG of ``scenes.colour.tonemap(image, white=white)`` (Reinhard + sRGB)."""
     return encode_png(np.round(tonemap(image, white=white) * 255.0))
 
 

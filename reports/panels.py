@@ -42,15 +42,13 @@ from reports.display import (
     CLIP_ABOVE,
     CLIP_BELOW,
     DIFF_RANGE_RULE,
-    LUMA,
     UNDEFINED,
     difference_range,
     false_colour,
-    luminance,
-    white_point,
 )
 from reports.page_data import view_data
 from reports.records import SceneComparison
+from scenes.colour import LUMA, luminance, white_point
 from scenes.files import atomic_write_bytes
 
 __all__ = ["MAP_COLORMAPS", "THUMBNAIL_SIZE", "Z_LIMIT", "Z_REPORTED", "Assets", "hdr_script",
@@ -302,8 +300,11 @@ def _default_profile(assets: Assets, view: str, raw: dict[str, np.ndarray], *, f
 def hdr_script(panels: list[dict[str, Any]]) -> str:
     """``window.causticsHdr``: the RGBE previews of each view without float data (the
     page draws a view with data from its data); ``window.causticsColormap``: the
-    false-colour table (:func:`reports.images.lookup_table`, 256 RGB bytes in base64)."""
-    lines = ["window.causticsHdr = window.causticsHdr || {};"]
+    false-colour table (:func:`reports.images.lookup_table`, 256 RGB bytes in base64);
+    ``window.causticsLuma``: the luminance weights :data:`scenes.colour.LUMA` (the
+    page's probe and canvases weigh RGB with them, so they have no copy of their own)."""
+    lines = ["window.causticsHdr = window.causticsHdr || {};",
+             f"window.causticsLuma = {json.dumps(LUMA.tolist())};"]
     for panel in panels:
         if panel["hdr"] is not None and panel["data"] is None:
             lines.append(f"window.causticsHdr[{json.dumps(panel['view'])}] = "

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from reports.display import LUMA, luminance
+from scenes.colour import LUMA, luminance
 
 __all__ = ["PROFILE_COLUMNS", "Profile", "default_profile", "line_pixels", "peak_pixel",
            "profile_csv", "sample_profile"]

@@ -15,7 +15,8 @@ Image naming: ``images`` keys are ``"<view>/<kind>"`` where view is ``camera`` o
 * ``signed``     method − reference, float (H, W, 3)
 * ``ssim``       SSIM map of the tone-mapped images, float (H, W) in [-1, 1]
 * ``flip``       HDR-FLIP map, float (H, W) in [0, 1]
-* ``mask_caustic``  bool (H, W): the caustic region (reference above its threshold)
+* ``mask_caustic``  bool (H, W): the scene's caustic region, the independent
+  reference above its threshold (``harness.compare.regions.scene_caustic_region``)
 * ``mask_object``   bool (H, W), camera only: pixels of the caustic object and its
   silhouette (excluded from ``object_masked``; the ``object`` region is its interior)
 

@@ -5,7 +5,7 @@ with their formulas.
 
 The animation is an animated WebP written by Pillow (lossless, looping, one frame
 per rendered frame): each frame is three panels, the method and the reference
-tone-mapped with the sequence's white point (``reports.display.tonemap``) and their
+tone-mapped with the sequence's white point (``scenes.colour.tonemap``) and their
 signed luminance difference in false colour over a range fixed for the whole
 sequence, with +v up, each box-filtered down to at most :data:`PANEL_SIZE` pixels,
 and under them a progress bar (frame i fills (i + 1) / T of it, so no two frames are
@@ -28,12 +28,13 @@ import numpy as np
 from PIL import Image
 
 from reports import images
-from reports.display import false_colour, luminance, tonemap
+from reports.display import false_colour
 from reports.panels import Assets
 from reports.plots import figure_bytes
 from reports.records import SceneComparison
 from reports.temporal_plots import frame_strip_figure, time_series_figure
 from reports.temporal_records import TEMPORAL_FORMULAS, TemporalComparison
+from scenes.colour import luminance, tonemap
 
 __all__ = ["GAP", "PANEL_SIZE", "PROGRESS_HEIGHT", "animated_webp", "animation_frames",
            "compare_flicker", "flicker_statement", "temporal_index", "temporal_script",

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from reports.display import tonemap
 from reports.temporal_records import TemporalComparison
+from scenes.colour import tonemap
 
 __all__ = ["STRIP_FRAMES", "frame_strip_figure", "strip_indices", "time_series_figure"]
 

@@ -531,7 +531,7 @@ class Settings:
     target_noise: float = spec(
         0.01, doc="Stop when the reference's relative noise in the caustic region "
         "is below this: the RMS relative standard error of each RGB channel over the "
-        "region the comparison scores, the largest channel's.", gt=0,
+        "reference's own caustic region, the largest channel's.", gt=0,
     )
     reference_time_cap: float = spec(
         120.0, doc="Time cap of the reference's receiver maps (all seeds, wall clock "

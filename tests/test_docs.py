@@ -1,11 +1,15 @@
 """The documentation that lives in the repository: README.md and docs/*.md.
 
-Two regression locks:
+Three regression locks:
 
 * every relative link in README.md and docs/*.md points to a file that exists and,
   where it names an anchor (``file.md#heading`` or ``#heading``), to a heading of
   that Markdown file (anchors as GitHub makes them: lower case, punctuation but
   ``-`` and ``_`` dropped, spaces to ``-``, ``-1``, ``-2`` ... for repeated headings);
+* every dotted name of the project's code in backticks there
+  (``harness.compare.regions.scene_caustic_region``, ``renderers.mitsuba.llvm``,
+  ``python -m harness.system``) resolves: the longest prefix that is a module
+  imports, and the rest are attributes of it;
 * no file of the product (the packages, the tests, the docs, the README and the
   build files) points the reader outside the repository for an explanation: no
   citation of the team's design guide by file name and no issue number. Facts are
@@ -14,6 +18,7 @@ Two regression locks:
 
 from __future__ import annotations
 
+import importlib
 import re
 from pathlib import Path
 
@@ -23,6 +28,10 @@ REPO = Path(__file__).resolve().parents[1]
 DOCS = sorted((REPO / "docs").glob("*.md"))
 MARKDOWN = [REPO / "README.md", *DOCS]
 
+#: The project's top-level packages: the folders beside this one with an __init__.py.
+PACKAGES = sorted(p.parent.name for p in REPO.glob("*/__init__.py"))
+#: A dotted name rooted at one of them, not part of a path or a longer word.
+DOTTED = re.compile(rf"(?<![\w./-])((?:{'|'.join(PACKAGES)})(?:\.[A-Za-z_]\w*)+)")
 #: Inline Markdown links [text](target); images too (a leading "!" changes nothing).
 LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
 #: Citations that point outside the repository. The design guide's file name and the
@@ -98,10 +107,68 @@ def test_slug_follows_github():
     assert _slug("Presets: `paper` and `strong`") == "presets-paper-and-strong"
 
 
-def test_docs_pages_exist():
-    """The four pages the README links to are there."""
-    names = {p.name for p in DOCS}
-    assert {"architecture.md", "reference.md", "method.md", "statistics.md"} <= names
+def dotted_names(path: Path) -> list[tuple[int, str]]:
+    """(line, name) of every dotted name of the project inside a code span of the
+    Markdown file ``path`` (fenced blocks left out)."""
+    names, fenced = [], False
+    for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+        if line.lstrip().startswith("```"):
+            fenced = not fenced
+            continue
+        if fenced:
+            continue
+        for span in re.findall(r"`([^`]+)`", line):
+            names += [(number, name) for name in DOTTED.findall(span)]
+    return names
+
+
+def resolve(name: str) -> object:
+    """The object ``name`` names: the longest prefix that is a module, imported, then
+    each further part as an attribute. Raises ImportError or AttributeError."""
+    parts = name.split(".")
+    for end in range(len(parts), 0, -1):
+        module = ".".join(parts[:end])
+        try:
+            found = importlib.import_module(module)
+        except ModuleNotFoundError as error:
+            if error.name is not None and module.startswith(error.name):
+                continue  # not a module: try a shorter prefix
+            raise  # the module exists and failed to import something of its own
+        for part in parts[end:]:
+            found = getattr(found, part)
+        return found
+    raise ImportError(f"no module in {name}")
+
+
+@pytest.mark.parametrize("page", MARKDOWN, ids=lambda p: str(p.relative_to(REPO)))
+def test_dotted_names_resolve(page):
+    """Every ``package.module.name`` of the project in the page exists in the code."""
+    broken = []
+    for number, name in dotted_names(page):
+        try:
+            resolve(name)
+        except (ImportError, AttributeError) as error:
+            broken.append(f"{page.name}:{number}: `{name}` ({type(error).__name__}: {error})")
+    assert not broken, "names that do not resolve:\n" + "\n".join(broken)
+
+
+def test_a_broken_dotted_name_is_caught(tmp_path):
+    """The name check can fail: a missing attribute and a missing module are both
+    seen; paths, file names and fenced code are not names."""
+    page = tmp_path / "page.md"
+    page.write_text("`harness.compare.regions.scene_caustic_region` `renderers.mitsuba.llvm` "
+                    "`harness.compare.regions.no_such_function` `reports.no_such_module.x` "
+                    "`python -m harness.system` `tests/harness/test_cli.py` `metrics.json`\n"
+                    "```\nharness.fenced.name\n```\n", encoding="utf-8")
+    names = [name for _, name in dotted_names(page)]
+    assert names == ["harness.compare.regions.scene_caustic_region",
+                     "renderers.mitsuba.llvm", "harness.compare.regions.no_such_function",
+                     "reports.no_such_module.x", "harness.system"]
+    assert callable(resolve(names[0])) and resolve(names[1]).__name__ == names[1]
+    with pytest.raises(AttributeError):
+        resolve(names[2])
+    with pytest.raises(AttributeError):
+        resolve(names[3])
 
 
 @pytest.mark.parametrize("page", MARKDOWN, ids=lambda p: str(p.relative_to(REPO)))

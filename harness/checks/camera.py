@@ -34,9 +34,9 @@ from harness.checks.analytic import not_applicable
 from harness.checks.bounds import holds
 from harness.checks.physical import PHYSICAL
 from harness.checks.sphere_camera import SphereCamera, analytic_sphere_camera, black_fraction
-from reports.display import luminance
 from reports.records import Check
 from scenes import Scene
+from scenes.colour import luminance
 
 __all__ = ["LENS_BOUND", "camera_measures", "camera_requirements", "exact_camera"]
 

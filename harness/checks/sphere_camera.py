@@ -35,9 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from renderers.results import ReceiverMap
-from reports.display import luminance
 from scenes import effects_of
 from scenes.camera import pinhole_directions
+from scenes.colour import luminance
 from scenes.model import (
     DielectricMaterial,
     DirectionalLight,
@@ -47,7 +47,7 @@ from scenes.model import (
     SphereObject,
 )
 
-#: ``luminance`` (Rec. 709, :func:`reports.display.luminance`) is importable from
+#: ``luminance`` (Rec. 709, :func:`scenes.colour.luminance`) is importable from
 #: here beside the black level it is compared with.
 __all__ = ["BLACK_LEVEL", "SphereCamera", "analytic_sphere_camera", "black_fraction",
            "luminance"]

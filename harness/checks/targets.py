@@ -40,8 +40,8 @@ from scipy.ndimage import uniform_filter
 from harness.checks.bounds import Target, judge
 from harness.compare.evaluate import score_value
 from harness.compare.uncertainty import ExcessInputs, metric_excess
-from reports.display import luminance
 from reports.records import Check, MetricValue
+from scenes.colour import luminance
 
 __all__ = ["TARGET", "caustic_relmse", "check_targets", "focus_measures", "target_measures"]
 

@@ -22,15 +22,13 @@ from harness.checks import KINDS
 from harness.checks.run import count_by_kind
 from harness.commands.scene import load_scenes
 from harness.compare.consistency import disagreements as output_disagreements
-from harness.compare.pipeline import CompareOptions, default_studies, known_studies
+from harness.compare.pipeline import default_studies, known_studies
 from harness.terminal import markup, plain
-from harness.writable import usable_cache
-from renderers.mitsuba.cache import cache_dir
 from reports.records import SceneFailure, slower
 from scenes import Scene, SceneError, default_scene_path, parse_override, with_settings
 
-__all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "compare_options", "excess_cell",
-           "headline_lines", "print_summary", "summary_rows"]
+__all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "excess_cell", "headline_lines",
+           "print_summary", "summary_rows"]
 
 def excess_cell(m) -> str:
     """One metric for the summary: the method's own (excess) error with its 95 %
@@ -162,15 +160,6 @@ def _load(paths: list[str], overrides: dict) -> list[tuple[str, Scene | SceneErr
         for problem in error.problems:
             print(f"error: {plain(problem)}", file=sys.stderr)
     return loaded
-
-
-def compare_options(args: argparse.Namespace, studies: tuple[str, ...]) -> CompareOptions:
-    """The pipeline's options from the command line."""
-    # An unwritable cache must not cost the run: render without it (one warning).
-    use_cache = not args.no_cache and usable_cache(cache_dir(args.cache_dir))
-    return CompareOptions(studies=studies, max_iterations=args.max_iterations,
-                          quick=args.quick, cache=args.cache_dir, use_cache=use_cache,
-                          progress=not args.quiet, frames=getattr(args, "frames", None))
 
 
 def compare(args: argparse.Namespace) -> int:

@@ -30,13 +30,21 @@ def scene_caustic_region(independent: np.ndarray) -> np.ndarray:
     :func:`caustic_region` of the *independent* reference (the K disjoint seeds).
 
     The region belongs to the scene, not the method: it is computed from references
-    alone, once per scene and receiver, and every method, study, check, figure and
-    sweep row of that scene scores the same texels, so a method that spreads dim light
+    alone, once per scene and receiver, and every method, study, accuracy check
+    (regression locks aside), sweep row and pytest assertion of that scene scores the
+    same texels, so a method that spreads dim light
     cannot move its own denominator (light it puts outside is scored by the
     ``full`` region and by the ``stray_flux`` measure). It is not thresholded on the
     scored reference itself: that keeps the texels its noise pushed up and biases
     every noise correction (``harness.metrics.excess``); the independent reference's
     noise is independent of the scored one's.
+
+    Three paths score elsewhere, each against a reference of its own that has no
+    independent twin: the regression locks (:mod:`harness.checks.locks`, over the
+    golden reference's :func:`caustic_region`, the rule they were calibrated with), the
+    paper figures (:func:`harness.figures.common.receiver_scores`, over the figure's
+    reference's) and the temporal study's frames (each frame's reference's). Within
+    each, too, every method is scored over the same texels.
 
     Parameters
     ----------

@@ -33,9 +33,10 @@ from harness.compare.regions import object_mask, object_region, scene_caustic_re
 from harness.compare.timed import TimedRender
 from renderers.mitsuba.noise import relative_noise_per_channel
 from renderers.results import RenderResult
-from reports.display import difference_range, luminance
+from reports.display import difference_range
 from reports.records import FluxBudgets, MetricValue
 from scenes import Scene, effects_of
+from scenes.colour import luminance
 from scenes.errors import HarnessError
 from scenes.geometry import SceneGeometry
 

@@ -26,8 +26,8 @@ import numpy as np
 
 from harness.metrics import MetricInputError, stray_flux
 from harness.metrics.excess import t_interval
-from reports.display import LUMA
 from reports.records import MetricValue
+from scenes.colour import LUMA
 
 __all__ = ["stray_flux_value"]
 

@@ -64,7 +64,7 @@ from harness.metrics.baselines import (
     ssim_map,
 )
 from harness.metrics.excess import excess_relative_mse, t_interval
-from reports.display import LUMA
+from scenes.colour import LUMA
 
 __all__ = ["BASELINE_TRIALS", "ExcessInputs", "metric_excess"]
 

@@ -21,8 +21,8 @@ from harness.compare.regions import object_region
 from harness.figures.common import FigureContext, shared_white, show
 from harness.metrics import false_colour
 from harness.studies.runner import frame_seconds
-from reports.display import luminance, tonemap
 from reports.records import Table
+from scenes.colour import luminance, tonemap
 from scenes.geometry import build_geometry
 
 __all__ = ["OBJECT_COLUMNS", "camera_row", "figure_01", "figure_09", "object_difference_row",

@@ -4,7 +4,7 @@ Every figure ``NAME`` writes ``NAME.png`` and ``NAME.pdf`` (matplotlib), the dat
 was drawn from (``NAME.csv`` and/or ``NAME.json``) and ``NAME.txt``, a caption that
 states the settings and the measured numbers. Receiver maps are drawn with +v up
 (row 0 = vmin at the bottom); images are tone-mapped with the reference's white
-point (``reports.display``) so both sides of a comparison share one curve.
+point (``scenes.colour.tonemap``) so both sides of a comparison share one curve.
 
 No figure is written with two of its texts over each other: :meth:`FigureContext.save`
 first draws it with Agg and compares the boxes of every text the draw puts on the
@@ -33,9 +33,9 @@ from harness.compare.outputs import write_json, write_table
 from harness.compare.regions import caustic_region
 from renderers.caustics_mapping import create_context, render
 from renderers.mitsuba.reference import render_reference
-from reports.display import tonemap, white_point
 from reports.records import Table
 from scenes import Scene, load_scene, with_settings
+from scenes.colour import tonemap, white_point
 from scenes.errors import HarnessError
 from scenes.files import atomic_write_bytes
 

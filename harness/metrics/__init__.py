@@ -24,7 +24,8 @@ from harness.metrics.temporal import (
     high_frequency_energy_ratio_map,
     temporal_flicker,
 )
-from reports.display import false_colour, luminance, tonemap, white_point
+from reports.display import false_colour
+from scenes.colour import luminance, tonemap, white_point
 
 __all__ = [
     "MetricInputError",

@@ -89,8 +89,9 @@ off; an interval wholly below 0 cannot come from a method (e ≥ 0) and says the
 reference's variance is overstated.
 
 Region: the scored region must come from a reference *independent* of the one scored
-(:func:`scored_region`). A region thresholded on R itself keeps texels where R's noise
-happened to be high and drops those where it was low, so E[η | selected] ≠ 0 there and
+(:func:`harness.compare.regions.scene_caustic_region` thresholds the independent
+reference). A region thresholded on R itself keeps texels where R's noise happened to
+be high and drops those where it was low, so E[η | selected] ≠ 0 there and
 neither v̂ nor the weight corrections see it: the excess is biased by the selection.
 """
 
@@ -104,7 +105,7 @@ from scipy.special import gammaln, stdtrit
 from harness.metrics.scores import RELMSE_EPSILON, MetricInputError, relative_mse
 
 __all__ = ["CONFIDENCE", "ExcessError", "excess_relative_mse", "relmse_variance_terms",
-           "scored_region", "t_interval"]
+           "t_interval"]
 
 #: Two-sided confidence of the reported interval.
 CONFIDENCE = 0.95
@@ -161,24 +162,6 @@ class ExcessError:
                 "distinguishable": self.distinguishable,
                 "degrees_of_freedom": self.degrees_of_freedom,
                 "estimator": self.estimator}
-
-
-def scored_region(method_region: np.ndarray, independent_region: np.ndarray) -> np.ndarray:
-    """The union of the method's region and an independent reference's region (H, W).
-
-    Neither region may be drawn from the reference being scored: thresholding that
-    reference keeps the texels its noise pushed up, which biases every noise
-    correction (module docstring). The method's own region is included so a caustic the
-    method puts where there is none is scored too.
-    """
-    a = np.asarray(method_region, bool)
-    b = np.asarray(independent_region, bool)
-    if a.shape != b.shape:
-        raise MetricInputError(f"region shapes differ: {a.shape} and {b.shape}")
-    return a | b
-
-
-# ---- weights and their derivatives ---------------------------------------------------
 
 
 def _w(x, eps):
@@ -486,7 +469,7 @@ def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
         K, the seeds behind ``variance`` (its degrees of freedom are K − 1).
     mask : ndarray (H, W) of bool, optional
         The scored region; it must not be derived from ``reference``
-        (:func:`scored_region`). Default: every texel.
+        (:func:`harness.compare.regions.scene_caustic_region`). Default: every texel.
     independent, independent_variance : ndarray (H, W, 3), optional
         A second reference on disjoint seeds and its variance of the mean: the split
         estimator (half the variance, no third-moment bias).

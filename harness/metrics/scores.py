@@ -7,7 +7,7 @@ relMSE        mean over pixels and channels of d² / (reference² + ε), ε = 0.
               the trimmed form drops the largest 0.1 % of the per-value terms first
               (outliers from fireflies or single-texel splats).
 PSNR          10 log10(peak² / MSE), peak = the reference's maximum in the mask.
-SSIM          Wang et al. 2004 on tone-mapped images (``reports.display``):
+SSIM          Wang et al. 2004 on tone-mapped images (``scenes.colour.tonemap``):
               Gaussian weights σ = 1.5, population covariance, K1 = 0.01, K2 = 0.03,
               data_range = 1; the mean of the SSIM map over the mask.
 FLIP          HDR-FLIP (Andersson et al. 2021) through ``flip-evaluator`` with a
@@ -24,7 +24,7 @@ import flip_evaluator
 import numpy as np
 from skimage.metrics import structural_similarity as ssim
 
-from reports.display import luminance, tonemap
+from scenes.colour import luminance, tonemap
 from scenes.errors import HarnessError
 
 __all__ = [

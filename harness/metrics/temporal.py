@@ -30,7 +30,7 @@ Flicker (the relMSE of the frame-to-frame differences)
     F(R, M) − F(R, R') / 2 estimates the flicker against the noise-free reference.
 
 Temporal high-frequency energy
-    Per pixel, of the luminance Y (``reports.display.luminance``):
+    Per pixel, of the luminance Y (``scenes.colour.luminance``):
     E(x) = Σ_{t=1}^{T−2} (Y_{t+1}(x) − 2 Y_t(x) + Y_{t−1}(x))².
     The second difference is a high-pass filter with power response
     |H(f)|² = 16 sin⁴(π f / fps): zero for a constant pixel and for one that changes
@@ -62,7 +62,7 @@ from __future__ import annotations
 import numpy as np
 
 from harness.metrics.scores import RELMSE_EPSILON, MetricInputError
-from reports.display import luminance
+from scenes.colour import luminance
 
 __all__ = [
     "HF_DELTA_FRACTION",

@@ -13,7 +13,7 @@ We make both testable, each as "value <= bound":
 * **one iteration**: the image error after one iteration is within
   ``ONE_ITERATION_MARGIN`` (10 %) of the error after the most iterations measured,
   N: more iterations no longer change what one sees. The error is the receiver
-  map's *excess* relMSE over the method's caustic region
+  map's *excess* relMSE over the scene's caustic region
   (:func:`harness.metrics.excess.excess_relative_mse`: its relMSE against the
   noise-free image, the reference's noise removed), so the ratio is e₁ / e_N.
 

@@ -87,9 +87,9 @@ from renderers.caustics_mapping.lights import light_setups
 from renderers.caustics_mapping.presets import resolve_settings
 from renderers.caustics_mapping.record_splat import SplattedMaps, splat_records, split_records
 from reports.decomposition_records import DECOMPOSITION_COLUMNS, DecompositionRecord
-from reports.display import luminance
 from reports.records import Table
 from scenes import Scene, effects_of
+from scenes.colour import luminance
 from scenes.errors import HarnessError
 from scenes.model import ConductorMaterial, DielectricMaterial, MeshObject
 

@@ -2,7 +2,8 @@
 
 No module here imports Mitsuba or Dr.Jit at import time; :func:`._mi.load` does it,
 once, on first use, after :func:`renderers.mitsuba.llvm.configure_drjit` has set
-``DRJIT_LIBLLVM_PATH``.
+``DRJIT_LIBLLVM_PATH`` (or raised, naming ``caustics setup``: nothing here installs a
+system package).
 
 Public entry points
 -------------------

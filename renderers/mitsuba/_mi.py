@@ -1,10 +1,13 @@
 """The one place that imports Mitsuba and Dr.Jit.
 
 :func:`renderers.mitsuba.llvm.configure_drjit` runs first, so Dr.Jit's LLVM backend finds
-the libLLVM it needs (>= 16) instead of guessing. Dr.Jit's CUDA backend compiles
-through the driver and needs no libLLVM: a forced CUDA variant skips the step, and so
-does the choice by device where no libLLVM is found and the driver reports a CUDA
-device (an offline GPU machine without libLLVM then traces on ``cuda_ad_rgb``).
+the libLLVM it needs (>= 16) instead of guessing; where there is none, the first
+:func:`load` raises :class:`renderers.mitsuba.llvm.LibLLVMNotFoundError`, which names
+the set-up step (``caustics setup``). Loading never installs anything. Dr.Jit's CUDA
+backend compiles through the driver and needs no libLLVM: a forced CUDA variant skips
+the step, and so does the choice by device where no libLLVM is found and the driver
+reports a CUDA device (an offline GPU machine without libLLVM then traces on
+``cuda_ad_rgb``).
 
 The variant is ``cuda_ad_rgb`` where Dr.Jit finds a CUDA device, else ``llvm_ad_rgb``;
 the environment variable :data:`VARIANT_ENV` forces one
@@ -40,7 +43,16 @@ class MitsubaError(HarnessError, RuntimeError):
 
 @functools.cache
 def load() -> tuple[ModuleType, ModuleType, str]:
-    """Import Mitsuba and Dr.Jit, select the variant; return ``(mi, dr, variant)``."""
+    """Import Mitsuba and Dr.Jit, select the variant; return ``(mi, dr, variant)``.
+
+    Raises
+    ------
+    renderers.mitsuba.llvm.LibLLVMNotFoundError
+        The variant needs libLLVM and none is found (nothing is installed: the
+        message names ``caustics setup``).
+    MitsubaError
+        A forced variant Mitsuba cannot use here, or no variant loads.
+    """
     forced = os.environ.get(VARIANT_ENV, "").strip()
     if _needs_libllvm(forced):
         configure_drjit()

@@ -1,8 +1,12 @@
-"""Dr.Jit's LLVM backend: which libLLVM it loads, set explicitly.
+"""Dr.Jit's LLVM backend: which libLLVM it loads, set explicitly, never installed.
 
 Dr.Jit 1.5's LLVM backend aborts on Debian 12's default LLVM 15 ("Cannot select:
 fminimum"); Debian's ``libllvm19`` works. We never leave Dr.Jit to guess: the path is
 set explicitly in ``DRJIT_LIBLLVM_PATH`` before Dr.Jit is imported.
+
+Nothing here installs: a missing libLLVM is :class:`LibLLVMNotFoundError` at first use,
+which names the set-up step (``caustics setup``, as root) and the manual command.
+Installing is :func:`harness.system.ensure_libllvm`'s alone.
 """
 
 from __future__ import annotations
@@ -11,10 +15,11 @@ import ctypes
 import glob
 import os
 
-from renderers.system import find_or_install
+from renderers.system import SETUP_COMMAND, SystemSetupError
 
-__all__ = ["LLVM_PACKAGE", "configure_drjit", "cuda_device_present", "ensure_libllvm",
-           "find_libllvm"]
+__all__ = ["DEBIAN_LIBLLVM", "INSTALL_COMMAND", "LLVM_GLOBS", "LLVM_PACKAGE",
+           "LibLLVMNotFoundError", "configure_drjit", "cuda_device_present", "find_libllvm",
+           "missing_message"]
 
 #: Debian package that provides a libLLVM Dr.Jit 1.5 accepts.
 LLVM_PACKAGE = "libllvm19"
@@ -26,7 +31,16 @@ LLVM_GLOBS = (
     "/usr/lib/aarch64-linux-gnu/libLLVM-19.so*",
     "/usr/lib/llvm-19/lib/libLLVM*.so*",
 )
+#: The package manager's command (as root), for the set-up step and for messages.
 INSTALL_COMMAND = f"apt-get update && apt-get install -y {LLVM_PACKAGE}"
+#: Where Debian's package puts the library on x86-64: the value to give
+#: ``DRJIT_LIBLLVM_PATH`` after a manual install.
+DEBIAN_LIBLLVM = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
+
+
+class LibLLVMNotFoundError(SystemSetupError):
+    """No libLLVM >= 16 for Dr.Jit's LLVM backend; the message names the set-up step."""
+
 
 def find_libllvm() -> str | None:
     """Path of a usable libLLVM (>= 16), honouring an existing ``DRJIT_LIBLLVM_PATH``."""
@@ -40,8 +54,20 @@ def find_libllvm() -> str | None:
     return None
 
 
-def ensure_libllvm(*, install: bool = True) -> str:
-    """Find libLLVM for Dr.Jit, installing Debian's ``libllvm19`` when root and allowed.
+def missing_message() -> str:
+    """What to do when :func:`find_libllvm` finds nothing: the set-up step, the manual
+    install with the path to set, and the CUDA variant that needs no libLLVM."""
+    preset = os.environ.get("DRJIT_LIBLLVM_PATH")
+    where = (f"DRJIT_LIBLLVM_PATH={preset} is not a file, and " if preset else "")
+    return (f"Dr.Jit's LLVM backend needs libLLVM >= 16 and none was found ({where}"
+            f"nothing matches {', '.join(LLVM_GLOBS) or 'no search path'}); install "
+            f"it with `{SETUP_COMMAND}` (as root), or `{INSTALL_COMMAND}` and then "
+            f"DRJIT_LIBLLVM_PATH={DEBIAN_LIBLLVM}; on an NVIDIA GPU, "
+            "CAUSTICS_MITSUBA_VARIANT=cuda_ad_rgb needs no libLLVM")
+
+
+def configure_drjit() -> str:
+    """Set ``DRJIT_LIBLLVM_PATH`` explicitly (before Dr.Jit is imported); return it.
 
     Returns
     -------
@@ -50,17 +76,13 @@ def ensure_libllvm(*, install: bool = True) -> str:
 
     Raises
     ------
-    SystemSetupError
-        Not found, and not installable here; the message gives the exact command.
+    LibLLVMNotFoundError
+        None found; the message names ``caustics setup`` and the manual command.
+        Nothing is installed.
     """
-    return find_or_install(
-        find_libllvm, LLVM_PACKAGE, INSTALL_COMMAND, install=install,
-        missing="Dr.Jit's LLVM backend needs libLLVM >= 16 and none was found")
-
-
-def configure_drjit(*, install: bool = True) -> str:
-    """Set ``DRJIT_LIBLLVM_PATH`` explicitly (before Dr.Jit is imported); return it."""
-    path = ensure_libllvm(install=install)
+    path = find_libllvm()
+    if path is None:
+        raise LibLLVMNotFoundError(missing_message())
     os.environ["DRJIT_LIBLLVM_PATH"] = path
     return path
 

@@ -4,8 +4,11 @@ With K seed estimates x_1..x_K of a texel, the reference is their mean and its
 variance is the variance *of the mean*, s^2 / K with s^2 the unbiased sample
 variance (K - 1 in the denominator).
 
-Caustic region: the region a comparison scores, :func:`renderers.results.caustic_region`
-of the reference's caustic map (luminance above 0.1 x its 99.5th percentile).
+Caustic region: :func:`renderers.results.caustic_region` of this reference's caustic
+map (luminance above 0.1 x its 99.5th percentile), the rule of the region a comparison
+scores; the comparison applies it to the independent reference instead
+(``harness.compare.regions.scene_caustic_region``), which is not traced yet when this
+reference's noise decides when to stop.
 
 Relative noise, per RGB channel c: the root mean square, over the region's texels i
 where channel c is lit (mean_ic > 0), of the texel's standard error over its value,

@@ -6,9 +6,9 @@ streams): first the launches of :func:`.photons.launch_plan` for the starting bu
 launch, every launch stratified at its own size), then whole launches. After each
 round, the per-seed estimates (each seed's sums over its photons so far / those
 photons; every seed traces the same launches) give the mean, the variance of the
-mean and the relative noise per channel in the caustic region the comparison scores
-(:mod:`.noise`); :class:`ReceiverRounds` keeps these rounds, for this process and for
-a sweep's per-seed tasks alike. Rounds stop (``stopped_by``):
+mean and the relative noise per channel over this reference's own caustic region (the
+scored region's rule, :mod:`.noise`); :class:`ReceiverRounds` keeps these rounds, for
+this process and for a sweep's per-seed tasks alike. Rounds stop (``stopped_by``):
 
 * ``"target_noise"``: the noise (the largest channel's) is at most
   ``settings.target_noise``;
@@ -338,8 +338,8 @@ class ReceiverRounds:
         for r in range(n_rec):
             per_seed = np.stack([c[r] for c in self._caustic]) / traced
             cmean, cvar = seed_statistics(per_seed)
-            # Noise of what is compared: the caustic map, per channel, over the
-            # region the comparison scores.
+            # Noise of what is compared: the caustic map, per channel, over its own
+            # caustic region (the scored region's rule, on this reference).
             region = caustic_region(cmean)
             counts.append(int(region.sum()))
             channels.append(relative_noise_per_channel(cmean, cvar, region))

@@ -21,6 +21,7 @@
  *
  * window.causticsColormap = {name, base64}: the false-colour table, 256 RGB bytes,
  * drawn by reports.images.lookup_table from matplotlib's colormap.
+ * window.causticsLuma = [wR, wG, wB]: the luminance weights (scenes/colour.py LUMA).
  *
  * This part creates window.causticsReport, the namespace the other parts share.
  */
@@ -29,8 +30,12 @@
 
   const report = window.causticsReport = window.causticsReport || {};
 
-  /* Rec. 709 luma weights for linear RGB, as reports/display.py LUMA. */
-  report.LUMA = [0.2126, 0.7152, 0.0722];
+  /* Rec. 709 luma weights for linear RGB: scenes/colour.py LUMA, which the page's
+   * hdr.js sets (reports/panels.py hdr_script); the page has no copy of its own. */
+  if (!Array.isArray(window.causticsLuma) || window.causticsLuma.length !== 3) {
+    throw new Error("window.causticsLuma (the luminance weights) was not loaded (hdr.js)");
+  }
+  report.LUMA = window.causticsLuma;
 
   function bytesOf(base64) {
     const text = atob(base64);

@@ -2,8 +2,9 @@
 glass_sphere at a 512 x 512 camera, 128 x 128 grid, 3 iterations (the paper's
 Fig. 6 setting). Goal on the 2-core llvmpipe machine: >= 30 fps. Timings come from
 ``ctx.finish()`` + ``time.perf_counter()`` per pass (GL timer queries are invalid
-on llvmpipe); no GPU was available when this was written, so only llvmpipe numbers
-exist. Not a pass/fail test of speed: it reports, and fails only on a broken render.
+on llvmpipe), on a GPU alike; measured runs are in docs/benchmarks.md (an NVIDIA
+H200's among them). Not a pass/fail test of speed: it reports, and fails only on a
+broken render.
 
 Two frame rates are reported, labelled: the full harness frame (every pass
 ``render()`` runs) and the application frame, the same frames less the

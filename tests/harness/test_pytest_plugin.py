@@ -1,13 +1,14 @@
 """The pytest plugin (harness.pytest_plugin) and the example third-party project
 (examples/caustics-example-method) that uses it: loading the plugin imports no
-renderer; its options are listed and read from the ini file; the example's tests
-pass under ``pytest -n 2`` with each reference rendered once; its broken variant
-fails with one message naming scene, method, metric, excess and interval, bound and
-a report page that exists."""
+renderer; its options are listed and read from the ini file, and the command line
+wins over the ini file; the example's tests pass under ``pytest -n 2`` with each
+reference rendered once; its broken variant fails with one message naming scene,
+method, metric, excess and interval, bound and a report page that exists."""
 
 from __future__ import annotations
 
 import importlib.metadata
+import json
 import os
 import re
 import subprocess
@@ -48,9 +49,38 @@ def test_options_are_listed_and_read_from_the_ini_file(pytester):
             assert caustics.failure_dir == root / "fails"
     """)
     pytester.runpytest("-p", "no:cacheprovider").assert_outcomes(passed=1)
-    # The command line wins over the ini file.
-    pytester.runpytest("-p", "no:cacheprovider", "--caustics-cache-dir", "/elsewhere",
-                       "-k", "nothing").assert_outcomes(deselected=1)
+
+
+#: A test of the pytester project that records the folders the plugin settled on.
+_RECORD_FOLDERS = """
+import json
+from pathlib import Path
+
+def test_record(caustics, pytestconfig):
+    seen = {"cache": str(caustics.cache_dir), "failures": str(caustics.failure_dir)}
+    (Path(pytestconfig.inipath).parent / "seen.json").write_text(json.dumps(seen))
+"""
+
+
+def test_the_command_line_wins_over_the_ini_file(pytester):
+    """With both folders set in the ini file, ``--caustics-cache-dir`` replaces the
+    ini's cache folder and leaves its failure folder as it is; with both options
+    given, both come from the command line (read back from what the ``caustics``
+    fixture holds inside the run)."""
+    pytester.makeini("[pytest]\ncaustics_cache_dir = refs\ncaustics_failure_dir = fails\n")
+    pytester.makepyfile(test_record=_RECORD_FOLDERS)
+    root, seen = pytester.path, pytester.path / "seen.json"
+    other_cache, other_fails = root / "cli-refs", root / "cli-fails"
+
+    pytester.runpytest("-p", "no:cacheprovider", "--caustics-cache-dir",
+                       str(other_cache)).assert_outcomes(passed=1)
+    assert json.loads(seen.read_text()) == {"cache": str(other_cache),
+                                            "failures": str(root / "fails")}
+    seen.unlink()
+    pytester.runpytest("-p", "no:cacheprovider", "--caustics-cache-dir", str(other_cache),
+                       "--caustics-failure-dir", str(other_fails)).assert_outcomes(passed=1)
+    assert json.loads(seen.read_text()) == {"cache": str(other_cache),
+                                            "failures": str(other_fails)}
 
 
 def test_caustics_scenes_marker_parametrises_the_scene(pytester):

@@ -128,18 +128,31 @@ def test_reference_command_renders_without_an_unwritable_cache(tmp_path, capsys,
     assert "warning: reference cache" in capsys.readouterr().err
 
 
-def test_compare_options_leave_an_unwritable_cache_out(tmp_path, capsys):
-    """Regression lock: compare's options turn the cache off (one warning) when its
-    folder cannot be written, and keep it on otherwise."""
-    from harness.cli import build_parser  # noqa: PLC0415
-    from harness.commands.compare import compare_options  # noqa: PLC0415 - loads the renderers
+@pytest.mark.parametrize("writable", [False, True], ids=["unwritable", "writable"])
+def test_compare_command_leaves_an_unwritable_cache_out(tmp_path, capsys, monkeypatch,
+                                                        writable):
+    """Regression lock: ``caustics compare --cache-dir DIR`` (the CLI's own path, down
+    to the pipeline's options) renders without the cache, with one warning, when DIR
+    cannot be written, and with it, silently, when it can. The pipeline is stopped
+    where it would render: what it was handed is what we check."""
+    from harness import api  # noqa: PLC0415 - loads the renderers
 
-    blocker = tmp_path / "cache"
-    blocker.write_text("")
-    args = build_parser().parse_args(["compare", "-o", str(tmp_path / "o"),
-                                      "--cache-dir", str(blocker)])
-    assert compare_options(args, ("metrics",)).use_cache is False
-    assert "warning: reference cache" in capsys.readouterr().err
-    args = build_parser().parse_args(["compare", "-o", str(tmp_path / "o"),
-                                      "--cache-dir", str(tmp_path / "ok")])
-    assert compare_options(args, ("metrics",)).use_cache is True
+    seen = []
+
+    def fake_run(scene, method, *, options, checks, crosscheck):
+        seen.append((options.use_cache, options.cache))
+        raise KeyboardInterrupt  # stop before rendering: the decision is what we check
+
+    monkeypatch.setattr(api, "run_comparison", fake_run)
+    cache = tmp_path / "cache"
+    if writable:
+        cache.mkdir()
+    else:
+        cache.write_text("")  # a file where the cache folder should be
+    assert main(["compare", "glass_sphere", "-o", str(tmp_path / "out"), "--studies",
+                 "metrics", "--preset", "paper", "--cache-dir", str(cache), "-q"]) == 130
+    assert seen == [(writable, str(cache))]
+    warnings = [line for line in capsys.readouterr().err.splitlines()
+                if line.startswith("warning: reference cache")]
+    assert len(warnings) == (0 if writable else 1)
+    assert not (tmp_path / "out").exists()  # stopped before anything was written

@@ -187,7 +187,7 @@ def test_scene_page_in_chromium(browser, reports, comparison, mode):
 
 def test_canvas_tone_map_matches_the_metrics_tone_map(browser, reports, comparison):
     """At exposure 0 the page's JavaScript tone curve gives the same 8-bit pixels as
-    ``reports.display`` on the shipped data (within one level), for the
+    ``scenes.colour.tonemap`` on the shipped data (within one level), for the
     camera image and the (flipped) receiver map: no colour management, no alpha
     premultiplication, no drift between the two implementations."""
     root = reports["linked"] / "glass_sphere-paper"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 import xml.etree.ElementTree as ET
 from dataclasses import replace
@@ -15,6 +16,7 @@ from reports import build_report, scene_folder
 from reports.build import hardware, speedup_text
 from reports.page_data import RELATIVE_BOUND
 from reports.records import METRIC_FORMULAS, EqualErrorSpeedup, Table
+from scenes.colour import LUMA
 from tests.reports.conftest import HOSTILE_NAME, hdr_uris
 from tests.reports.data_helpers import page_layers
 
@@ -69,6 +71,19 @@ def test_layout_of_a_linked_report(linked, comparison):
     folders = sorted(p.name for p in linked.iterdir() if p.is_dir())
     hostile = scene_folder(f"{HOSTILE_NAME}-paper")
     assert folders == sorted(["_data", "_static", "glass_sphere-paper", hostile])
+
+
+def test_the_pages_luminance_weights_are_the_metrics(linked, embedded):
+    """Regression lock: the page's script has no weights of its own: both page forms
+    carry ``window.causticsLuma`` with exactly :data:`scenes.colour.LUMA` (the probe
+    and canvases weigh RGB with it), and the script reads them from there."""
+    expected = f"window.causticsLuma = {json.dumps(LUMA.tolist())};"
+    assert expected == "window.causticsLuma = [0.2126, 0.7152, 0.0722];"
+    assert expected in (linked / "glass_sphere-paper" / "hdr.js").read_text("utf-8")
+    assert expected in (embedded / "glass_sphere-paper" / "index.html").read_text("utf-8")
+    script = (linked / "_static" / "report.js").read_text("utf-8")
+    assert "report.LUMA = window.causticsLuma;" in script
+    assert "0.7152" not in script
 
 
 def test_self_contained_report_is_one_file_per_page(embedded):

@@ -24,9 +24,9 @@ import pytest
 from harness.compare.outputs import write_comparison
 from renderers.exr import read_exr
 from reports import build_report, images, page_data
-from reports.display import LUMA
 from reports.page_data import BLOB_FOLDER, RELATIVE_BOUND
 from reports.profiles import line_pixels
+from scenes.colour import LUMA
 from tests.browser import new_context
 from tests.conftest import REPO
 from tests.reports.data_helpers import blob_payload, page_layers

@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from reports import build_report
-from reports.display import LUMA
 from reports.profiles import (
     PROFILE_COLUMNS,
     default_profile,
@@ -20,6 +19,7 @@ from reports.profiles import (
     profile_csv,
     sample_profile,
 )
+from scenes.colour import LUMA
 
 
 @pytest.mark.parametrize(("start", "end", "xs", "ys"), [

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from reports import build_report, scene_folder
-from reports.display import tonemap
 from reports.images import downsample
 from reports.temporal import GAP, PROGRESS_HEIGHT, animation_frames, compare_flicker
+from scenes.colour import tonemap
 from tests.reports.conftest import make_comparison
 from tests.reports.temporal_helpers import FRAMES, decode_webp, make_temporal, with_temporal
 

@@ -30,10 +30,11 @@ from harness.compare.outputs import write_comparison
 from harness.metrics import signed_difference
 from renderers.exr import read_exr
 from reports import build_report
-from reports.display import CLIP_ABOVE, CLIP_BELOW, LUMA, difference_range, false_colour
+from reports.display import CLIP_ABOVE, CLIP_BELOW, difference_range, false_colour
 from reports.page_data import RELATIVE_BOUND
 from reports.panels import MAP_COLORMAPS, Z_LIMIT, Z_REPORTED
 from reports.records import EqualErrorSpeedup, SpeedupWithheld
+from scenes.colour import LUMA
 from tests.browser import new_context
 from tests.reports.test_browser import PageLog, open_ready_page
 

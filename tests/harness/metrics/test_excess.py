@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from harness.metrics import relative_mse
-from harness.metrics.excess import excess_relative_mse, scored_region
+from harness.metrics.excess import excess_relative_mse
 from harness.metrics.scores import MetricInputError
 
 TRIALS = 400
@@ -172,11 +172,3 @@ def test_mask_and_input_errors():
     with pytest.raises(MetricInputError, match="non-negative"):
         excess_relative_mse(truth, truth, -variance, seeds=4)
 
-
-def test_scored_region_is_the_union():
-    a = np.zeros((2, 2), bool)
-    b = np.zeros((2, 2), bool)
-    a[0, 0], b[1, 1] = True, True
-    assert scored_region(a, b).tolist() == [[True, False], [False, True]]
-    with pytest.raises(MetricInputError, match="region shapes"):
-        scored_region(a, np.zeros((3, 3), bool))

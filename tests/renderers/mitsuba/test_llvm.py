@@ -1,4 +1,5 @@
-"""Dr.Jit's libLLVM is found, or installed as root, or the error says how."""
+"""Dr.Jit's libLLVM is found and set explicitly, or its absence is a typed error
+naming the set-up step (never an install); a CUDA variant needs none."""
 
 from __future__ import annotations
 
@@ -8,14 +9,14 @@ import sys
 
 import pytest
 
-from renderers import system as apt
 from renderers.mitsuba import llvm
 
 
 def test_found_library_is_configured(monkeypatch):
-    """On this machine (tox installs libllvm19 first) the path is set explicitly."""
+    """On this machine (tox's set-up step installs libllvm19 first) the path is set
+    explicitly."""
     monkeypatch.delenv("DRJIT_LIBLLVM_PATH", raising=False)
-    path = llvm.configure_drjit(install=False)
+    path = llvm.configure_drjit()
     assert os.path.isfile(path) and "19" in os.path.basename(path)
     assert os.environ["DRJIT_LIBLLVM_PATH"] == path
 
@@ -27,33 +28,18 @@ def test_preset_path_is_honoured(monkeypatch, tmp_path):
     assert llvm.find_libllvm() == str(lib)
 
 
-def test_missing_and_not_root_names_the_command(monkeypatch):
-    """Without the library and without root, the error gives the exact apt command."""
-    monkeypatch.delenv("DRJIT_LIBLLVM_PATH", raising=False)
+def test_missing_library_names_the_setup_step(monkeypatch):
+    """Without the library the error names ``caustics setup``, the apt command and
+    the variable to set; a stale DRJIT_LIBLLVM_PATH is named too."""
+    monkeypatch.setenv("DRJIT_LIBLLVM_PATH", "/nonexistent/libLLVM.so.19.1")
     monkeypatch.setattr(llvm, "LLVM_GLOBS", ("/nonexistent/libLLVM.so.19*",))
-    monkeypatch.setattr(apt.os, "geteuid", lambda: 1000)
-    with pytest.raises(apt.SystemSetupError) as info:
-        llvm.ensure_libllvm(install=True)
-    assert "apt-get update && apt-get install -y libllvm19" in str(info.value)
-
-
-def test_install_is_attempted_as_root(monkeypatch):
-    """As root, a missing library triggers the apt install, then is found."""
-    monkeypatch.delenv("DRJIT_LIBLLVM_PATH", raising=False)
-    calls = []
-    monkeypatch.setattr(apt.os, "geteuid", lambda: 0)
-    monkeypatch.setattr(apt.shutil, "which", lambda name: "/usr/bin/apt-get")
-
-    def fake_install(package):
-        calls.append(package)
-        monkeypatch.setattr(llvm, "LLVM_GLOBS", ("/usr/lib/x86_64-linux-gnu/libLLVM.so.19*",))
-
-    monkeypatch.setattr(llvm, "LLVM_GLOBS", ("/nonexistent/libLLVM.so.19*",))
-    monkeypatch.setattr(apt, "_apt_install", fake_install)
-    assert "19" in llvm.ensure_libllvm(install=True)
-    assert calls == ["libllvm19"]
-
-
+    with pytest.raises(llvm.LibLLVMNotFoundError) as info:
+        llvm.configure_drjit()
+    message = str(info.value)
+    assert "`caustics setup`" in message
+    assert "apt-get update && apt-get install -y libllvm19" in message
+    assert f"DRJIT_LIBLLVM_PATH={llvm.DEBIAN_LIBLLVM}" in message
+    assert "DRJIT_LIBLLVM_PATH=/nonexistent/libLLVM.so.19.1 is not a file" in message
 
 
 #: Loads Mitsuba with the libLLVM set-up replaced by a failure (and, with argument
@@ -61,7 +47,7 @@ def test_install_is_attempted_as_root(monkeypatch):
 _LOAD_WITHOUT_LIBLLVM = """
 import sys
 import renderers.mitsuba._mi as m
-def asked(**kwargs):
+def asked():
     raise AssertionError("libLLVM was asked for")
 m.configure_drjit = asked
 if sys.argv[1:] == ["auto"]:

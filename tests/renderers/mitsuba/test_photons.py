@@ -2,31 +2,46 @@
 photons actually traced recorded.
 
 Regression locks on the plan (:func:`renderers.mitsuba.photons.launch_plan`) and on
-``PhotonTracer.trace``, which follows it; that each launch size is stratified at its
-own size is checked lane by lane in ``test_emission.py``.
+``PhotonTracer.trace``, which follows it, and what the default launch size must give
+the default budget; that each launch size is stratified at its own size is checked
+lane by lane in ``test_emission.py``.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
-from renderers.mitsuba.emission import MAX_STRATIFIED_LANES
-from renderers.mitsuba.photons import DEFAULT_BATCH, PhotonTracer, launch_plan
+from renderers.mitsuba.emission import MAX_STRATIFIED_LANES, stratified_square
+from renderers.mitsuba.photons import DEFAULT_BATCH, PhotonTracer, lane_rng, launch_plan
 from scenes.model import Settings
 from tests.renderers.mitsuba.scenes import glass_sphere, make_scene
 
 POINT = 'type = "point"\nposition = [0.0, 0.0, 6.0]\nintensity = [30.0, 30.0, 30.0]'
 
 
-def test_the_default_budget_is_whole_launches():
-    """The default budget per seed is two whole launches of 2^20 photons: no partial
-    launch, each launch a power of four (one lane per cell of a 1024 x 1024 grid)."""
+def test_the_default_budget_traces_whole_square_stratified_launches():
+    """What the default launch size must give the default budget per seed: launches
+    that sum to the budget exactly, all of one size (no partial launch with coarser
+    strata than the others), and each launch's strata the cells of a square grid:
+    tracing one launch of that size puts exactly one lane's (u1, u2) in each cell of
+    the sqrt(n) x sqrt(n) grid (which needs n a power of four; with any other size
+    some cells hold two lanes and some none)."""
     budget = Settings().photons
     plan = launch_plan(budget)
-    assert plan == (DEFAULT_BATCH, DEFAULT_BATCH)
     assert sum(plan) == budget
-    assert DEFAULT_BATCH == 4**10 and DEFAULT_BATCH <= MAX_STRATIFIED_LANES
+    assert len(set(plan)) == 1, plan
+    n = plan[0]
+    side = math.isqrt(n)
+    u, v = stratified_square(lane_rng(n, 7), n)
+    u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
+    cells = np.floor(v * side).astype(np.int64) * side + np.floor(u * side).astype(np.int64)
+    counts = np.bincount(cells, minlength=side * side)
+    assert counts.size == n and counts.min() == 1 and counts.max() == 1, (
+        f"{n} lanes over a {side} x {side} grid: {np.count_nonzero(counts == 0)} "
+        f"cells empty, {np.count_nonzero(counts > 1)} with more than one lane")
 
 
 def test_a_budget_off_whole_launches_ends_with_one_smaller_launch():
