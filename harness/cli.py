@@ -228,6 +228,22 @@ def _export_command(subparsers) -> None:
                    "box; never coarser than the scene's own tessellation)")
 
 
+def _import_command(subparsers) -> None:
+    p = _command(subparsers, "import", "harness.commands.import_scene:import_scene",
+                 "read a glTF 2.0 or Mitsuba 3 XML scene into a scene file "
+                 "(docs/bring-your-scene.md)")
+    p.add_argument("file", metavar="FILE", help=".gltf, .glb or Mitsuba .xml")
+    p.add_argument("-o", "--output", required=True, metavar="SCENE.toml",
+                   help="scene file to write; meshes go to <stem>_meshes/ beside it")
+    p.add_argument("--approximate", action="store_true",
+                   help="replace what the scene model cannot hold (area lights, rough or "
+                   "textured materials, extra lights) by a stated approximation instead "
+                   "of refusing the file")
+    p.add_argument("--camera", metavar="NAME",
+                   help="the camera node (glTF) or sensor id (Mitsuba) to use (default: the "
+                   "first perspective one)")
+
+
 def _figures_command(subparsers) -> None:
     p = _command(subparsers, "figures", "harness.commands.figures:figures",
                  "regenerate the paper's figures with their data", output_dir=True)
@@ -316,7 +332,7 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for group in (_setup_command, _scene_commands, _render_commands, _compare_command,
                   _figures_command, _crosscheck_command, _check_commands, _sweep_command,
-                  _export_command):
+                  _export_command, _import_command):
         group(subparsers)
     return parser
 

@@ -63,6 +63,7 @@ from scenes.model import (
     Scene,
     SpotLight,
 )
+from scenes.tables import to_table
 
 __all__ = ["HARD_EDGE", "UNITS", "GltfExport", "export_gltf"]
 
@@ -249,7 +250,7 @@ def _light(gltf, buffer: _Buffer, light) -> int:
     lights = gltf.extensions.setdefault("KHR_lights_punctual", {"lights": []})["lights"]
     index = _add(lights, {"name": "light", **punctual})
     node.extensions = {"KHR_lights_punctual": {"light": index}}
-    node.extras = {"harness": harness}
+    node.extras = {"harness": {**harness, "table": to_table(light)}}
     return _add(gltf.nodes, node)
 
 
@@ -274,7 +275,8 @@ def _area_light(gltf, buffer: _Buffer, light: AreaLight) -> int:
         extensions={"KHR_materials_emissive_strength": {"emissiveStrength": strength}})
     extras = {"harness": {"type": "area", "intensity": _vec(light.intensity),
                           "radiance": _vec(radiance), "size": _vec(light.size),
-                          "normal": _vec(to_gltf(n)), "samples": int(light.samples)}}
+                          "normal": _vec(to_gltf(n)), "samples": int(light.samples),
+                          "table": to_table(light)}}
     return _mesh_node(gltf, buffer, mesh, name="light", material=_add(gltf.materials, material),
                       uvs=None, extras=extras)
 
@@ -291,7 +293,8 @@ def _scene_camera(gltf, scene: Scene) -> int:
     index = _add(gltf.cameras, gl.Camera(name="camera", type="perspective",
                                          perspective=perspective))
     extras = {"harness": {"look_at": _vec(target), "up": _vec(up), "fov_deg": camera.fov,
-                          "fov_axis": camera.fov_axis, "resolution": [width, height]}}
+                          "fov_axis": camera.fov_axis, "resolution": [width, height],
+                          "table": to_table(camera)}}
     return _add(gltf.nodes, gl.Node(name="camera", camera=index, translation=_vec(eye),
                                     rotation=quaternion(look_rotation(target - eye, up)),
                                     extras=extras))
@@ -341,9 +344,21 @@ def _normalised_uvs(mesh: TriangleMesh, extent) -> np.ndarray:
     return np.stack([(uv[:, 0] - umin) / (umax - umin), (uv[:, 1] - vmin) / (vmax - vmin)], 1)
 
 
+def _portable(table):
+    """A shape's scene table without the paths of the files it names (they are this
+    machine's; the triangles are in the file): a ``builtin:`` mesh keeps its name."""
+    if isinstance(table, dict):
+        return {k: _portable(v) for k, v in table.items()
+                if not (k == "file" and not str(v).startswith("builtin:"))}
+    return table
+
+
 def _asset_extras(scene: Scene, tolerance: float, given: bool, receivers, objects) -> dict:
     return {"harness": {
         "scene": scene.name,
+        # The scene-wide tables the nodes cannot hold (scene coordinates), so that an
+        # import gives back the same scene: [scene] and [settings].
+        "tables": {"scene": to_table(scene.info), "settings": to_table(scene.settings)},
         "units": UNITS,
         "axes": {"scene_up": "+z", "gltf_up": "+y", "gltf_from_scene":
                  GLTF_FROM_SCENE.tolist(), "rule": "(x, y, z) scene -> (x, z, -y) glTF"},
@@ -395,7 +410,7 @@ def export_gltf(scene: Scene, path: str | Path, *, tolerance: float | None = Non
                                                   name=f"receiver_{i}", closed=False,
                                                   thickness=0.0, double_sided=False))
         extras = {"harness": {"role": "receiver", "index": i, "kind": rec.kind,
-                              "tessellation": vars(receivers[i])}}
+                              "tessellation": vars(receivers[i]), "table": _portable(to_table(rec))}}
         roots.append(_mesh_node(gltf, buffer, built.mesh, name=f"receiver_{i}",
                                 material=material, uvs=_normalised_uvs(built.mesh, built.extent),
                                 extras=extras))
@@ -409,7 +424,8 @@ def export_gltf(scene: Scene, path: str | Path, *, tolerance: float | None = Non
                                                   closed=mesh.closed, thickness=thickness,
                                                   double_sided=not mesh.closed))
         extras = {"harness": {"role": "object", "index": i, "kind": obj.kind,
-                              "closed": bool(mesh.closed), "tessellation": vars(objects[i])}}
+                              "closed": bool(mesh.closed), "tessellation": vars(objects[i]),
+                              "table": _portable(to_table(obj))}}
         roots.append(_mesh_node(gltf, buffer, mesh, name=f"object_{i}", material=material,
                                 uvs=None, extras=extras))
     roots.append(_light(gltf, buffer, scene.light))
