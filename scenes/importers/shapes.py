@@ -56,7 +56,7 @@ def is_height_field(positions: np.ndarray, faces: np.ndarray) -> bool:
 
 def rectangle(positions: np.ndarray, faces: np.ndarray) -> dict | None:
     """A plane receiver's table (centre, size, normal, u_axis) if the triangles are one
-    rectangle (four distinct corners, right angles, all faces to one side), else None."""
+    rectangle (four distinct corners, right angles to 1e-6: float32 files, all faces to one side), else None."""
     corners = np.unique(np.round(positions, 12), axis=0)
     if len(corners) != 4 or len(faces) != 2:
         return None
@@ -71,8 +71,8 @@ def rectangle(positions: np.ndarray, faces: np.ndarray) -> dict | None:
     far = np.argmax(np.linalg.norm(corners - corners[0], axis=1))
     e1, e2 = (corners[k] - corners[0] for k in range(1, 4) if k != far)
     scale = np.linalg.norm(e1) * np.linalg.norm(e2)
-    planar = abs(np.dot(corners[far] - corners[0], normal)) <= 1e-9 * np.sqrt(scale)
-    if abs(np.dot(e1, e2)) > 1e-9 * scale or not planar:
+    planar = abs(np.dot(corners[far] - corners[0], normal)) <= 1e-6 * np.sqrt(scale)
+    if abs(np.dot(e1, e2)) > 1e-6 * scale or not planar:
         return None
     u_axis = e1 / np.linalg.norm(e1)
     return {"type": "plane", "center": centre.tolist(),
