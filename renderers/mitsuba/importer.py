@@ -16,7 +16,6 @@ resolve as Mitsuba resolves them; the loaded scene is then traversed.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np

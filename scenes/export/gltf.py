@@ -410,7 +410,8 @@ def export_gltf(scene: Scene, path: str | Path, *, tolerance: float | None = Non
                                                   name=f"receiver_{i}", closed=False,
                                                   thickness=0.0, double_sided=False))
         extras = {"harness": {"role": "receiver", "index": i, "kind": rec.kind,
-                              "tessellation": vars(receivers[i]), "table": _portable(to_table(rec))}}
+                              "tessellation": vars(receivers[i]),
+                              "table": _portable(to_table(rec))}}
         roots.append(_mesh_node(gltf, buffer, built.mesh, name=f"receiver_{i}",
                                 material=material, uvs=_normalised_uvs(built.mesh, built.extent),
                                 extras=extras))

@@ -231,7 +231,7 @@ def _agrees(table_point, node_point) -> bool:
     return bool(np.linalg.norm(a - b) <= 1e-6 * max(1.0, np.linalg.norm(a)))
 
 
-def _light(file: _File, draft: Draft, approx: bool, name: str, light: dict,
+def _light(file: _File, draft: Draft, approx: bool, name: str, light: dict,  # noqa: PLR0917
            world: np.ndarray, node: gl.Node) -> None:
     exact = _harness(node).get("table")
     position = _position(world)
@@ -271,7 +271,7 @@ def _light(file: _File, draft: Draft, approx: bool, name: str, light: dict,
                              "intensity read as W/sr, directional as W/m²)"))
 
 
-def _camera(file: _File, draft: Draft, approx: bool, cameras, wanted: str | None,
+def _camera(file: _File, draft: Draft, approx: bool, cameras, wanted: str | None,  # noqa: PLR0917
             centre: np.ndarray) -> None:
     if wanted is not None:
         cameras = [c for c in cameras if c[0] == repr(wanted)]
@@ -310,7 +310,7 @@ def _emissive(file: _File, material: int | None) -> bool:
     return any(v > 0 for v in (m.emissiveFactor or [0, 0, 0]))
 
 
-def _shape(file, draft, approx, name, node, world) -> None:
+def _shape(file, draft, approx, name, node, world) -> None:  # noqa: PLR0917
     """One mesh node: an exact table from extras, else classified by its material and
     triangles."""
     harness = _harness(node)
@@ -351,7 +351,7 @@ def _usable(table: dict) -> bool:
                 and "file" not in height)
 
 
-def _fallback(file, draft, approx, name, parts, positions, faces):
+def _fallback(file, draft, approx, name, parts, positions, faces):  # noqa: PLR0917
     """("receivers" | "objects", Part) from the triangles and the material alone."""
     where = f"node {name}"
     materials = {part[2] for part in parts}
@@ -384,7 +384,7 @@ def _fallback(file, draft, approx, name, parts, positions, faces):
     return "objects", Part({"type": "mesh", "material": material}, origin, mesh)
 
 
-def _area(file, draft, approx, where, harness, positions, faces, material) -> None:
+def _area(file, draft, approx, where, harness, positions, faces, material) -> None:  # noqa: PLR0917
     exact = harness.get("table")
     if isinstance(exact, dict) and exact.get("type") == "area":
         draft.lights.append(Part(exact, f"glTF {where} (the harness's area light, exact "

@@ -8,7 +8,7 @@ import numpy as np
 
 from scenes.geometry.meshfile import watertight
 
-__all__ = ["mesh_problem", "rectangle", "is_height_field", "is_closed", "ABSURD_SIZE"]
+__all__ = ["ABSURD_SIZE", "is_closed", "is_height_field", "mesh_problem", "rectangle"]
 
 #: Meshes whose bounding-box diagonal lies outside this range (m) are refused: a file in
 #: millimetres or kilometres read as metres, or a point-sized stray.
@@ -56,7 +56,8 @@ def is_height_field(positions: np.ndarray, faces: np.ndarray) -> bool:
 
 def rectangle(positions: np.ndarray, faces: np.ndarray) -> dict | None:
     """A plane receiver's table (centre, size, normal, u_axis) if the triangles are one
-    rectangle (four distinct corners, right angles to 1e-6: float32 files, all faces to one side), else None."""
+    rectangle (four distinct corners, right angles to 1e-6 for float32 files, all faces
+    to one side), else None."""
     corners = np.unique(np.round(positions, 12), axis=0)
     if len(corners) != 4 or len(faces) != 2:
         return None
