@@ -135,8 +135,6 @@ def _shape(mi, draft: Draft, approx: bool, shape, index: int) -> None:
             return
         table = {"type": "sphere", "center": matrix[:3, 3].tolist(),
                  "radius": float(scales.mean()), "material": material}
-        if material["type"] == "diffuse":
-            table["type"] = "sphere"
         draft.objects.append(Part(table, origin + "; tessellated as an icosphere"))
         return
     if kind == "Rectangle":
