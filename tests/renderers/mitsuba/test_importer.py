@@ -15,6 +15,7 @@ from scenes.geometry import build_geometry
 from scenes.importers import ImportProblemError, write_draft
 from scenes.loader import load_scene
 from scenes.model import DielectricMaterial, PlaneReceiver, PointLight, SphereObject
+from tests.scenes.importers.files import AREA_XML, XML_TEXT, plain_xml
 
 #: Water surfaces (open dielectric grids) have no scene-model equivalent other than their
 #: waves, which the XML does not hold: the import refuses them (a known gap).
@@ -50,40 +51,9 @@ def test_round_trip(name, tmp_path):
         assert np.abs(np.sort(pa, axis=0) - np.sort(pb, axis=0)).max() <= 1e-6 * scale
 
 
-_XML = """<scene version="3.0.0">
-  <default name="ior" value="1.5"/>
-  <include filename="floor.xml"/>
-  <shape type="sphere" id="glass"><point name="center" x="0" y="0" z="1"/>
-    <float name="radius" value="0.5"/>
-    <bsdf type="dielectric"><float name="int_ior" value="$ior"/>
-      <float name="ext_ior" value="1"/></bsdf></shape>
-  <emitter type="point" id="bulb"><point name="position" x="0" y="0" z="5"/>
-    <rgb name="intensity" value="10"/></emitter>
-  {extra}
-  <sensor type="perspective" id="eye"><float name="fov" value="40"/>
-    <transform name="to_world"><lookat origin="0,-5,3" target="0,0,0" up="0,0,1"/></transform>
-    <film type="hdrfilm"><integer name="width" value="320"/>
-      <integer name="height" value="240"/></film></sensor>
-</scene>
-"""
-_FLOOR = """<scene version="3.0.0"><shape type="rectangle" id="floor">
-  <transform name="to_world"><scale x="3" y="2"/><rotate z="1" angle="30"/></transform>
-  <bsdf type="diffuse"><rgb name="reflectance" value="0.5,0.4,0.3"/></bsdf></shape></scene>
-"""
-_AREA = """<shape type="sphere" id="lamp"><point name="center" x="2" y="0" z="3"/>
-    <emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"""
-
-
-def _write(tmp_path, extra: str = ""):
-    (tmp_path / "floor.xml").write_text(_FLOOR)
-    path = tmp_path / "scene.xml"
-    path.write_text(_XML.replace("{extra}", extra))
-    return path
-
-
 def test_hand_written_xml_imports(tmp_path):
     """Physical requirement: includes and defaults resolve as Mitsuba resolves them."""
-    scene = write_draft(read_mitsuba(_write(tmp_path)), tmp_path / "s.toml")
+    scene = write_draft(read_mitsuba(plain_xml(tmp_path)), tmp_path / "s.toml")
     assert isinstance(scene.light, PointLight) and scene.light.intensity == (10, 10, 10)
     (floor,) = scene.receivers
     assert isinstance(floor, PlaneReceiver) and sorted(floor.size) == pytest.approx([4, 6])
@@ -95,7 +65,7 @@ def test_hand_written_xml_imports(tmp_path):
 
 
 def test_area_emitter_refused_then_approximated(tmp_path):
-    path = _write(tmp_path, _AREA)
+    path = plain_xml(tmp_path, AREA_XML)
     with pytest.raises(ImportProblemError) as caught:
         write_draft(read_mitsuba(path), tmp_path / "s.toml")
     assert any("'lamp'" in p and "area light" in p for p in caught.value.problems)
@@ -105,7 +75,7 @@ def test_area_emitter_refused_then_approximated(tmp_path):
 
 def test_malformed_xml_is_one_line(tmp_path):
     path = tmp_path / "bad.xml"
-    path.write_text(_XML[:200])
+    path.write_text(XML_TEXT[:200])
     with pytest.raises(ImportProblemError) as caught:
         read_mitsuba(path)
     assert len(caught.value.problems) == 1 and "bad.xml" in caught.value.problems[0]
