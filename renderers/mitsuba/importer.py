@@ -16,6 +16,7 @@ resolve as Mitsuba resolves them; the loaded scene is then traversed.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -66,7 +67,8 @@ def _material(mi, bsdf, where: str, draft: Draft, approx: bool) -> dict | None:
     where = f"{where}, bsdf {kind}"
     textured = [k for k in params.keys() if k.startswith(prefix) and k.endswith(".data")]
     if textured and not draft.approximate(approx, where, "textured: the scene model's "
-                                          "materials are uniform", "its mean is used"):
+                                          "materials are uniform", "its mean is used",
+                                          part="shape"):
         return None
 
     def rgb(name, default):
@@ -83,7 +85,7 @@ def _material(mi, bsdf, where: str, draft: Draft, approx: bool) -> dict | None:
     if kind in {"SmoothDielectric", "RoughDielectric", "ThinDielectric"}:
         if kind != "SmoothDielectric" and not draft.approximate(
                 approx, where, "the scene model's dielectrics are smooth and closed",
-                "read as a smooth dielectric"):
+                "read as a smooth dielectric", part="shape"):
             return None
         eta = float(_array(params[prefix + "eta"]).ravel()[0]) if prefix + "eta" in params \
             else 1.5
@@ -91,7 +93,7 @@ def _material(mi, bsdf, where: str, draft: Draft, approx: bool) -> dict | None:
     if kind in {"SmoothConductor", "RoughConductor"}:
         if kind != "SmoothConductor" and not draft.approximate(
                 approx, where, "a rough conductor: the scene model's conductors are mirrors",
-                "read as a mirror"):
+                "read as a mirror", part="shape"):
             return None
         eta = np.asarray(rgb("eta", [0.0] * 3))
         k = np.asarray(rgb("k", [1.0] * 3))
@@ -99,7 +101,8 @@ def _material(mi, bsdf, where: str, draft: Draft, approx: bool) -> dict | None:
         f0 = ((eta - 1) ** 2 + k**2) / ((eta + 1) ** 2 + k**2)
         if np.abs(f0 - 1).max() > 1e-6 and not draft.approximate(
                 approx, where, "a conductor with an angle-dependent Fresnel factor: the "
-                "scene model's reflectance is constant", "its value at normal incidence"):
+                "scene model's reflectance is constant", "its value at normal incidence",
+                part="shape"):
             return None
         reflectance = np.clip(np.asarray(rgb("specular_reflectance", [1.0] * 3)) * f0, 0, 1)
         return {"type": "conductor", "reflectance": reflectance.tolist()}
@@ -107,7 +110,7 @@ def _material(mi, bsdf, where: str, draft: Draft, approx: bool) -> dict | None:
         return {"type": "diffuse",
                 "albedo": np.clip(rgb("reflectance", [0.5] * 3), 0, 1).tolist()}
     draft.refuse(where, "a BSDF the scene model does not hold (it holds dielectric, "
-                 "thindielectric, conductor and diffuse)")
+                 "thindielectric, conductor and diffuse)", part="shape")
     return None
 
 
@@ -131,7 +134,7 @@ def _shape(mi, draft: Draft, approx: bool, shape, index: int) -> None:
         matrix = _matrix(params["to_world"])
         scales = np.linalg.norm(matrix[:3, :3], axis=0)
         if np.ptp(scales) > 1e-6 * scales.max():
-            draft.refuse(where, "an ellipsoid (a sphere scaled unevenly)")
+            draft.refuse(where, "an ellipsoid (a sphere scaled unevenly)", part="shape")
             return
         table = {"type": "sphere", "center": matrix[:3, 3].tolist(),
                  "radius": float(scales.mean()), "material": material}
@@ -147,11 +150,11 @@ def _shape(mi, draft: Draft, approx: bool, shape, index: int) -> None:
         faces = np.asarray(np.array(params["faces"]), np.int64).reshape(-1, 3)
     else:
         draft.refuse(where, f"a {kind} shape: the importer reads meshes (obj, ply, "
-                     "serialized), sphere and rectangle")
+                     "serialized), sphere and rectangle", part="shape")
         return
     problem = mesh_problem(positions, faces)
     if problem:
-        draft.refuse(where, f"the mesh {problem}")
+        draft.refuse(where, f"the mesh {problem}", part="shape")
         return
     normals = None
     if "vertex_normals" in params and kind != "Rectangle":
@@ -172,7 +175,7 @@ def _shape(mi, draft: Draft, approx: bool, shape, index: int) -> None:
         return
     if material["type"] == "dielectric" and not is_closed(positions, faces):
         draft.refuse(where, "an open (non-manifold or not watertight) dielectric mesh: a "
-                     "dielectric must close a volume")
+                     "dielectric must close a volume", part="shape")
         return
     draft.objects.append(Part({"type": "mesh", "material": material}, origin, mesh))
 
@@ -203,14 +206,14 @@ def _emitter(mi, draft: Draft, approx: bool, emitter, index: int) -> None:
     else:
         draft.approximate(approx, f"Mitsuba {where}", f"a {kind} emitter (environment or "
                           "other): the scene model holds point, spot and directional lights",
-                          "it is left out")
+                          "it is left out", part="light")
 
 
 def _sensor(mi, draft: Draft, sensors, wanted: str | None, centre: np.ndarray) -> None:
     if wanted is not None:
         sensors = [s for s in sensors if s.id() == wanted]
         if not sensors:
-            draft.refuse("sensor", f"no sensor with id {wanted!r}")
+            draft.refuse("sensor", f"no sensor with id {wanted!r}", part="camera")
             return
     if not sensors:
         return
@@ -218,7 +221,7 @@ def _sensor(mi, draft: Draft, sensors, wanted: str | None, centre: np.ndarray) -
     where = _where("sensor", sensor, 0)
     if _kind(sensor) != "PerspectiveCamera":
         draft.refuse(where, f"a {_kind(sensor)} sensor: the scene model's camera is a "
-                     "perspective pinhole")
+                     "perspective pinhole", part="camera")
         return
     params = mi.traverse(sensor)
     matrix = _matrix(params["to_world"])
@@ -234,6 +237,15 @@ def _sensor(mi, draft: Draft, sensors, wanted: str | None, centre: np.ndarray) -
              "fov": float(_array(params["x_fov"]).ravel()[0]), "fov_axis": "x",
              "resolution": [width, height]}
     draft.camera = Part(table, f"Mitsuba {where} (perspective)")
+
+
+def _file_order(item) -> tuple:
+    """Shapes the harness exported (ids ``receiver_<i>``, ``object_<i>``) in the scene's
+    order, the others after them in Mitsuba's (``scene.shapes()`` does not keep the
+    file's order)."""
+    index, shape = item
+    found = re.fullmatch(r"(receiver|object)_(\d+)", shape.id())
+    return (0, found[1], int(found[2])) if found else (1, "", index)
 
 
 def read_mitsuba(path: str | Path, *, approximate: bool = False, camera: str | None = None
@@ -253,7 +265,7 @@ def read_mitsuba(path: str | Path, *, approximate: bool = False, camera: str | N
         first = (str(error).strip().splitlines() or [type(error).__name__])[0]
         raise ImportProblemError([f"{path}: Mitsuba cannot load it: {first}"]) from None
     draft = Draft(source=str(path), name=path.stem)
-    for index, shape in enumerate(scene.shapes()):
+    for index, shape in sorted(enumerate(scene.shapes()), key=_file_order):
         _shape(mi, draft, approximate, shape, index)
     for index, emitter in enumerate(scene.emitters()):
         _emitter(mi, draft, approximate, emitter, index)

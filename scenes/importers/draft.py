@@ -83,18 +83,25 @@ class Draft:
     approximations: list[str] = field(default_factory=list)
     #: One line per thing the scene model cannot hold, naming the part.
     problems: list[str] = field(default_factory=list)
+    #: Parts ("shape", "light", "camera") a refusal already accounts for.
+    explained: set[str] = field(default_factory=set)
 
-    def refuse(self, where: str, why: str) -> None:
-        """Record a problem: ``<source>: <where>: <why>``."""
+    def refuse(self, where: str, why: str, *, part: str | None = None) -> None:
+        """Record a problem: ``<source>: <where>: <why>``. ``part`` ("shape", "light",
+        "camera"): what the refused element would have been, so that :meth:`check` does
+        not report that part missing as a second line for the same problem."""
         self.problems.append(f"{self.source}: {where}: {why}")
+        if part:
+            self.explained.add(part)
 
-    def approximate(self, approximate: bool, where: str, why: str, instead: str) -> bool:
+    def approximate(self, approximate: bool, where: str, why: str, instead: str, *,
+                    part: str | None = None) -> bool:
         """A part the model cannot hold: with ``approximate``, record ``instead`` and return
         True (the caller substitutes it); else record a problem and return False."""
         if approximate:
             self.approximations.append(f"{where}: {why}; {instead}")
             return True
-        self.refuse(where, f"{why} (--approximate: {instead})")
+        self.refuse(where, f"{why} (--approximate: {instead})", part=part)
         return False
 
     def area_light(self, approximate: bool, where: str, centre, radiance, area: float
@@ -105,7 +112,8 @@ class Draft:
         intensity = [float(v) * area / 4 for v in radiance]
         if self.approximate(approximate, where, "an area light: the scene model holds "
                             "point, spot and directional lights", "a point light of the same "
-                            f"power at its centre, intensity {_short(intensity)} W/sr"):
+                            f"power at its centre, intensity {_short(intensity)} W/sr",
+                            part="light"):
             self.lights.append(Part({"type": "point", "position": [float(c) for c in centre],
                                      "intensity": intensity},
                                     f"{where} (area light, approximated by a point light)"))
@@ -116,22 +124,22 @@ class Draft:
             names = "; ".join(p.origin for p in self.lights)
             if not self.approximate(approximate, "lights", f"{len(self.lights)} lights "
                                     f"({names}): the scene model holds one",
-                                    "only the first is kept"):
+                                    "only the first is kept", part="light"):
                 return
         if self.lights:
             self.light = self.lights[0]
 
     def check(self) -> None:
         """Raise :class:`ImportProblemError` with every problem, including missing parts."""
-        if self.light is None and not self.problems:
+        if self.light is None and "light" not in self.explained:
             self.refuse("light", "the file has no light the scene model holds (a point, spot "
                         "or directional light)")
-        if self.camera is None:
+        if self.camera is None and "camera" not in self.explained:
             self.refuse("camera", "the file has no perspective camera")
-        if not self.receivers:
+        if not self.receivers and "shape" not in self.explained:
             self.refuse("receivers", "no diffuse surface can serve as a receiver (a plane, "
                         "or a mesh that is a height field over x, y)")
-        if not self.objects:
+        if not self.objects and "shape" not in self.explained:
             self.refuse("objects", "no caustic object (a dielectric or conductor shape)")
         if self.problems:
             raise ImportProblemError(self.problems)

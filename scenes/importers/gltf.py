@@ -233,7 +233,7 @@ class _Reader:
             return
         problem = mesh_problem(tri.positions, tri.faces)
         if problem:
-            draft.refuse(where, f"the mesh {problem}")
+            draft.refuse(where, f"the mesh {problem}", part="shape")
             return
         role, table = harness.get("role"), harness.get("table")
         if role in {"receiver", "object"} and isinstance(table, dict) and _usable(table):
@@ -247,9 +247,27 @@ class _Reader:
                         bounds=np.stack([tri.positions.min(axis=0), tri.positions.max(axis=0)]))
             (draft.receivers if role == "receiver" else draft.objects).append(part)
             return
+        if role in {"receiver", "object"} and isinstance(table, dict):
+            # The harness's own mesh, whose file the export could not name: its triangles,
+            # placed, in the role and with the material the table gives.
+            self.placed_mesh(label, role, table, tri)
+            return
         found = self.shape(label, tri)
         if found is not None:
             getattr(draft, found[0]).append(found[1])
+
+    def placed_mesh(self, label: str, role: str, table: dict, tri: _Triangles) -> None:
+        draft = self.draft
+        slug = re.sub(r"[^A-Za-z0-9_-]+", "_", label.strip("'")).strip("_") or "mesh"
+        mesh = MeshPart(f"{len(draft.receivers) + len(draft.objects)}_{slug}", tri.positions,
+                        tri.faces, tri.normals)
+        origin = f"glTF node {label} (the harness's {table.get('type')} {role}, its triangles)"
+        if role == "receiver":
+            draft.receivers.append(Part({"type": "mesh", "albedo": table["albedo"]}, origin,
+                                        mesh))
+        else:
+            draft.objects.append(Part({"type": "mesh", "material": table["material"]}, origin,
+                                      mesh))
 
     def shape(self, label: str, tri: _Triangles) -> tuple[str, Part] | None:
         """("receivers" | "objects", Part) from the triangles and the material alone."""
@@ -274,7 +292,7 @@ class _Reader:
                                    origin + " as an occluder", mesh)
         if material["type"] == "dielectric" and not is_closed(tri.positions, tri.faces):
             draft.refuse(where, "an open (non-manifold or not watertight) dielectric mesh: a "
-                         "dielectric must close a volume")
+                         "dielectric must close a volume", part="shape")
             return None
         return "objects", Part({"type": "mesh", "material": material}, origin, mesh)
 
@@ -369,7 +387,7 @@ class _Reader:
                  * float(light.get("intensity", 1.0))).tolist()
         if light.get("range") is not None and not draft.approximate(
                 self.approx, where, "a light with a range: the harness's lights reach "
-                "everywhere", "the range is ignored"):
+                "everywhere", "the range is ignored", part="light"):
             return
         if kind == "point":
             table = {"type": "point", "position": position.tolist(), "intensity": power}
@@ -383,7 +401,7 @@ class _Reader:
             if outer >= 90:
                 if not draft.approximate(self.approx, where, f"a cone of {outer:g}°: the "
                                          "harness's spot lights are narrower than 90°",
-                                         "cut to 89.9°"):
+                                         "cut to 89.9°", part="light"):
                     return
                 outer = 89.9
             # glTF blends between the cones in a renderer's own way; the harness's beam is
@@ -393,7 +411,8 @@ class _Reader:
                      "cutoff_angle": outer,
                      "beam_width": max(min(inner, outer), 1e-3 * outer)}
         else:
-            draft.refuse(where, f"light type {kind!r} is not point, spot or directional")
+            draft.refuse(where, f"light type {kind!r} is not point, spot or directional",
+                         part="light")
             return
         draft.lights.append(Part(table, f"glTF node {label} (KHR_lights_punctual {kind}; "
                                  "intensity read as W/sr, directional as W/m²)"))
@@ -405,13 +424,13 @@ class _Reader:
         if wanted is not None:
             cameras = [c for c in cameras if c[3].name == wanted]
             if not cameras:
-                draft.refuse("camera", f"no camera node named {wanted!r}")
+                draft.refuse("camera", f"no camera node named {wanted!r}", part="camera")
                 return
         perspective = [c for c in cameras if gltf.cameras[c[1]].type == "perspective"]
         if not perspective:
             if cameras:
                 draft.refuse(f"node {cameras[0][0]}", "an orthographic camera: the scene "
-                             "model's camera is a pinhole")
+                             "model's camera is a pinhole", part="camera")
             return
         label, index, world, node = perspective[0]
         position = _position(world)
@@ -483,7 +502,7 @@ def _walk(file: _File, reader: _Reader) -> tuple[list, list]:
         if light is not None:
             if not 0 <= light < len(punctual):
                 reader.draft.refuse(f"node {label}", f"names light {light}, the file has "
-                                    f"{len(punctual)}")
+                                    f"{len(punctual)}", part="light")
             else:
                 reader.light(label, punctual[light], world, node)
         if node.camera is not None:
