@@ -23,7 +23,13 @@ import numpy as np
 
 from renderers.mitsuba import _mi
 from scenes.importers.draft import Draft, ImportProblemError, MeshPart, Part
-from scenes.importers.shapes import is_closed, is_height_field, mesh_problem, rectangle
+from scenes.importers.shapes import (
+    icosphere,
+    is_closed,
+    is_height_field,
+    mesh_problem,
+    rectangle,
+)
 
 __all__ = ["read_mitsuba"]
 
@@ -172,6 +178,12 @@ def _shape(mi, draft: Draft, approx: bool, shape, index: int) -> None:
         else:
             draft.objects.append(Part({"type": "mesh", "material": material},
                                       origin + " as an occluder", mesh))
+        return
+    sphere = icosphere(positions, faces)
+    if sphere is not None:
+        draft.objects.append(Part({**sphere, "material": material}, f"Mitsuba {where} (the "
+                                  f"harness's icosphere, level {sphere['subdivisions']}: a "
+                                  f"sphere, {material['type']})"))
         return
     if material["type"] == "dielectric" and not is_closed(positions, faces):
         draft.refuse(where, "an open (non-manifold or not watertight) dielectric mesh: a "

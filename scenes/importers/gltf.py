@@ -33,7 +33,13 @@ from scipy.spatial.transform import Rotation
 
 from scenes.export.frames import GLTF_FROM_SCENE
 from scenes.importers.draft import Draft, ImportProblemError, MeshPart, Part
-from scenes.importers.shapes import is_closed, is_height_field, mesh_problem, rectangle
+from scenes.importers.shapes import (
+    icosphere,
+    is_closed,
+    is_height_field,
+    mesh_problem,
+    rectangle,
+)
 
 __all__ = ["read_gltf"]
 
@@ -290,6 +296,11 @@ class _Reader:
                                          origin + " as a height-field receiver", mesh)
             return "objects", Part({"type": "mesh", "material": material},
                                    origin + " as an occluder", mesh)
+        sphere = icosphere(tri.positions, tri.faces)
+        if sphere is not None:
+            return "objects", Part({**sphere, "material": material}, f"glTF node {label} "
+                                   f"(the harness's icosphere, level {sphere['subdivisions']}: "
+                                   f"a sphere, material {material['type']})")
         if material["type"] == "dielectric" and not is_closed(tri.positions, tri.faces):
             draft.refuse(where, "an open (non-manifold or not watertight) dielectric mesh: a "
                          "dielectric must close a volume", part="shape")

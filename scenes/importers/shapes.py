@@ -4,7 +4,11 @@ receiver), a closed surface; and the checks every imported mesh passes first."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+import trimesh
+from scipy.spatial import cKDTree
 
 from scenes.geometry.meshfile import watertight
 
@@ -75,7 +79,52 @@ def rectangle(positions: np.ndarray, faces: np.ndarray) -> dict | None:
     planar = abs(np.dot(corners[far] - corners[0], normal)) <= 1e-6 * np.sqrt(scale)
     if abs(np.dot(e1, e2)) > 1e-6 * scale or not planar:
         return None
-    u_axis = e1 / np.linalg.norm(e1)
+    # u runs along the side closest to +x (then +y): a file does not say which side is u,
+    # and this rule gives back the harness's own default frame (u = +x, v = +y).
+    sides = [side * sign for side in (e1, e2) for sign in (1.0, -1.0)]
+    u = max(sides, key=lambda side: tuple(np.round(side / np.linalg.norm(side), 9)[:2]))
+    v = e2 if u is sides[0] or u is sides[1] else e1
     return {"type": "plane", "center": centre.tolist(),
-            "size": [float(np.linalg.norm(e1)), float(np.linalg.norm(e2))],
-            "normal": normal.tolist(), "u_axis": u_axis.tolist()}
+            "size": [float(np.linalg.norm(u)), float(np.linalg.norm(v))],
+            "normal": normal.tolist(), "u_axis": (u / np.linalg.norm(u)).tolist()}
+
+
+def _snapped(value: float, quantum: float) -> float:
+    """``value`` on the grid of ``quantum`` (a power of ten), printed short: 2.0000001
+    read from float32 becomes 2.0 when the grid is 1e-6."""
+    return float(f"{round(value / quantum) * quantum:.12g}")
+
+
+def icosphere(positions: np.ndarray, faces: np.ndarray) -> dict | None:
+    """A sphere object's table (centre, radius, subdivisions) if the vertices are those
+    of the harness's own icosphere (the one ``trimesh.creation.icosphere`` makes, so a
+    sphere the harness or trimesh tessellated), to 1e-6 of the radius; else None.
+
+    The sphere then renders with analytic normals and the same triangles as the file,
+    and the centre and radius are snapped to a 1e-6 r grid when that keeps the match
+    (a float32 file's 2.0000001 is the scene's 2.0).
+    """
+    count, triangles = len(positions), len(faces)
+    level = round(math.log((count - 2) / 10, 4)) if count > 12 else 0
+    if not 1 <= level <= 7 or count != 10 * 4**level + 2 or triangles != 20 * 4**level:
+        return None
+    centre = positions.mean(axis=0)
+    distance = np.linalg.norm(positions - centre, axis=1)
+    radius = float(distance.mean())
+    if radius <= 0 or np.abs(distance - radius).max() > 1e-6 * radius:
+        return None
+    unit = np.asarray(trimesh.creation.icosphere(subdivisions=level, radius=1.0).vertices)
+    unit /= np.linalg.norm(unit, axis=1, keepdims=True)
+    tree = cKDTree(positions)
+
+    def matches(c, r) -> bool:
+        return bool(tree.query(unit * r + c)[0].max() <= 1e-6 * r)
+
+    quantum = 10.0 ** math.floor(math.log10(1e-6 * radius))
+    snapped = np.array([_snapped(v, quantum) for v in centre]), _snapped(radius, quantum)
+    if matches(*snapped):
+        centre, radius = snapped
+    elif not matches(centre, radius):
+        return None
+    return {"type": "sphere", "center": [float(v) for v in centre], "radius": float(radius),
+            "subdivisions": level}
