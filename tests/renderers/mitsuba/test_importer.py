@@ -129,3 +129,12 @@ def _maps(tracer, *, seeds):
                        for s in seeds])
     return ReceiverMap(irradiance=layers.mean(axis=0), extent=tracer.extents[0],
                        variance=layers.var(axis=0, ddof=1) / len(layers))
+
+
+def test_missing_mesh_file_is_one_line(tmp_path):
+    path = plain_xml(tmp_path, '<shape type="ply" id="gone"><string name="filename" '
+                     'value="meshes/gone.ply"/></shape>')
+    with pytest.raises(ImportProblemError) as caught:
+        read_mitsuba(path)
+    (line,) = caught.value.problems
+    assert "scene.xml" in line and "Mitsuba cannot load it" in line

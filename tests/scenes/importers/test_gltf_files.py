@@ -84,3 +84,17 @@ def test_not_gltf_is_one_line(tmp_path):
     with pytest.raises(ImportProblemError) as caught:
         read_gltf(bad)
     assert len(caught.value.problems) == 1
+
+
+def test_open_dielectric_is_refused(tmp_path):
+    """A glass mesh with a hole (not watertight) is one line naming its node; nothing
+    else is reported missing for it."""
+    gltf = gl.GLTF2().load(str(plain_gltf(tmp_path / "plain.glb")))
+    glass = next(n for n in gltf.nodes if n.name == "glass")
+    (primitive,) = gltf.meshes[glass.mesh].primitives
+    gltf.accessors[primitive.indices].count -= 3  # drop the last triangle
+    gltf.save(str(tmp_path / "open.glb"))
+    with pytest.raises(ImportProblemError) as caught:
+        write_draft(read_gltf(tmp_path / "open.glb"), tmp_path / "s.toml")
+    (line,) = caught.value.problems
+    assert "node 'glass'" in line and "not watertight" in line
