@@ -197,6 +197,11 @@ def _emitter(mi, draft: Draft, approx: bool, emitter, index: int) -> None:
     kind = _kind(emitter)
     params = mi.traverse(emitter)
     origin = f"Mitsuba {where} ({kind}; W/sr, W/m²)"
+    power = "irradiance.value" if kind == "DirectionalEmitter" else "intensity.value"
+    if kind in {"PointLight", "SpotLight", "DirectionalEmitter"} and _rgb(params, power) is None:
+        draft.refuse(where, f"its {power.removesuffix('.value')} is not an RGB or uniform value "
+                     "(a spectrum file or a texture)", part="light")
+        return
     if kind == "PointLight":
         draft.lights.append(Part({"type": "point",
                                   "position": _array(params["position"]).ravel().tolist(),
