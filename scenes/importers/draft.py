@@ -73,6 +73,8 @@ class Draft:
     #: Every light found; the scene model holds one (:meth:`check` keeps the first, with
     #: ``approximate``, or refuses).
     lights: list[Part] = field(default_factory=list)
+    #: Point lights standing in for area lights (``approximate``): after the file's own.
+    stand_in_lights: list[Part] = field(default_factory=list)
     light: Part | None = None
     camera: Part | None = None
     receivers: list[Part] = field(default_factory=list)
@@ -114,20 +116,22 @@ class Draft:
                             "point, spot and directional lights", "a point light of the same "
                             f"power at its centre, intensity {_short(intensity)} W/sr",
                             part="light"):
-            self.lights.append(Part({"type": "point", "position": [float(c) for c in centre],
-                                     "intensity": intensity},
-                                    f"{where} (area light, approximated by a point light)"))
+            table = {"type": "point", "position": [float(c) for c in centre],
+                     "intensity": intensity}
+            self.stand_in_lights.append(Part(table, f"{where} (area light, approximated by "
+                                             "a point light)"))
 
     def choose_light(self, approximate: bool) -> None:
         """Keep the one light the scene model holds."""
-        if len(self.lights) > 1:
-            names = "; ".join(p.origin for p in self.lights)
-            if not self.approximate(approximate, "lights", f"{len(self.lights)} lights "
+        lights = self.lights + self.stand_in_lights
+        if len(lights) > 1:
+            names = "; ".join(p.origin for p in lights)
+            if not self.approximate(approximate, "lights", f"{len(lights)} lights "
                                     f"({names}): the scene model holds one",
-                                    "only the first is kept", part="light"):
+                                    "only the first listed is kept", part="light"):
                 return
-        if self.lights:
-            self.light = self.lights[0]
+        if lights:
+            self.light = lights[0]
 
     def check(self) -> None:
         """Raise :class:`ImportProblemError` with every problem, including missing parts."""

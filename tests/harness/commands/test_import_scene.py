@@ -38,7 +38,10 @@ def test_area_light_is_one_line_then_approximated(tmp_path, capsys):
     assert main(["import", str(source), "-o", str(tmp_path / "s.toml"), "--approximate"]) == 0
     err = capsys.readouterr().err
     assert "approximated: Mitsuba shape 'lamp'" in err
-    assert "Approximated: Mitsuba shape 'lamp'" in (tmp_path / "s.toml").read_text()
+    text = (tmp_path / "s.toml").read_text()
+    assert "Approximated: Mitsuba shape 'lamp'" in text
+    # The file's own point light is kept; the area light's stand-in is second in line.
+    assert "# from Mitsuba emitter 'bulb'" in text
 
 
 def test_bad_file_and_usage(tmp_path, capsys):
