@@ -61,9 +61,10 @@ class DreiRender:
     textures : ndarray, (3, res, res)
         The caustic texture behind each RGB channel, W/m², row 0 at t = 0 (already
         scaled by the channel's share of the irradiance).
-    affine : tuple
-        (A, c): light-space (s, t) from receiver (u, v) (:func:`light_affine`).
-    light_camera : LightCamera
+    affines : tuple
+        Per pass, (A, c): light-space (s, t) from receiver (u, v) (:func:`light_affine`).
+    light_cameras : tuple of LightCamera
+        Per pass.
     page : dict
         The page's answer (timings, WebGL facts).
     """
@@ -71,8 +72,8 @@ class DreiRender:
     result: RenderResult
     params: DreiParams
     textures: np.ndarray
-    affine: tuple[np.ndarray, np.ndarray]
-    light_camera: LightCamera
+    affines: tuple[tuple[np.ndarray, np.ndarray], ...]
+    light_cameras: tuple[LightCamera, ...]
     page: dict
 
 
@@ -143,21 +144,29 @@ class DreiMethod:
                 page = driver.render_page(browser, glb=glb, bundle=script, config=config,
                                           timeout=self.timeout)
         frame = export.frames[0]
-        camera = LightCamera.from_page(page.data["lightCamera"])
-        affine = light_affine(camera, frame, height=params.height)
-        textures = np.stack([
-            params.channel_scale[c] * _caustic(page, params.channel_pass[c])
-            for c in range(3)])
-        mapped = receiver_map(textures, affine, frame)
+        cameras = tuple(LightCamera.from_page(c) for c in page.data["lightCameras"])
+        affines = tuple(light_affine(c, frame, height=params.height) for c in cameras)
+        # Each pass's texture carried onto the map; each channel takes its IOR's.
+        passes = [receiver_map(np.stack([_caustic(page, p)] * 3), affines[p], frame)
+                  for p in range(len(params.passes))]
+        irradiance = np.stack([params.channel_scale[c] * passes[params.channel_pass[c]]
+                               .irradiance[..., 0] for c in range(3)], axis=-1)
+        textures = np.stack([params.channel_scale[c] * _caustic(page, params.channel_pass[c])
+                             for c in range(3)])
+        flux = np.array([params.channel_scale[c] * passes[params.channel_pass[c]]
+                         .texture_flux[0] for c in range(3)])
+        outside = np.array([params.channel_scale[c] * passes[params.channel_pass[c]]
+                            .outside[0] for c in range(3)])
         timings, timer = _timings(page.data)
         metadata = {
             "component": COMPONENT, "options": params.component_options(),
             "iors": list(params.passes), "channel_pass": list(params.channel_pass),
             "channel_scale": list(params.channel_scale), "cos_theta": params.cos_theta,
             "assumptions": list(ASSUMPTIONS),
-            "texture_flux_w": mapped.texture_flux.tolist(),
-            "flux_outside_receiver_w": mapped.outside.tolist(),
-            "points_per_texel_side": mapped.points, "texel_area_m2": mapped.texel_area,
+            "texture_flux_w": flux.tolist(), "flux_outside_receiver_w": outside.tolist(),
+            "points_per_texel_side": passes[0].points, "texel_area_m2": passes[0].texel_area,
+            "light_camera_far_m": [c["far"] for c in page.data["lightCameras"]],
+            "far_after_repeated_updates_m": page.data["farAfterRepeats"],
             "caustics_type": page.data["causticsType"], "webgl": {
                 "renderer": page.data["webgl"]["renderer"],
                 "timer_query": page.data["webgl"]["timerQuery"]},
@@ -168,11 +177,11 @@ class DreiMethod:
         }
         result = RenderResult(
             renderer=self.name, camera=page.camera,
-            receivers=(ReceiverMap(mapped.irradiance.astype(np.float32), frame.extent),),
+            receivers=(ReceiverMap(irradiance.astype(np.float32), frame.extent),),
             effects=("refraction.single", *(("dispersion",) if len(params.passes) > 1
                                             else ())),
             timings=timings, timer=timer, metadata=metadata)
-        return DreiRender(result, params, textures, affine, camera, page.data)
+        return DreiRender(result, params, textures, affines, cameras, page.data)
 
     def _config(self, scene: Scene, params: DreiParams) -> dict:
         width, height = scene.camera.resolution

@@ -24,8 +24,8 @@
 //
 // result: front and back (per pass, base64 of float32 R of the component's front and
 // back caustic render targets, res x res, row 0 at the texture's t = 0; back null
-// without backside), lightCamera (projection and view
-// matrices, column-major, of the component's orthographic light camera), camera
+// without backside), lightCameras (per pass, the projection and view matrices,
+// column-major, and extent of the component's orthographic light camera), camera
 // (base64 float32 RGBA, width x height, row 0 at the image's bottom), timings (ms:
 // caustics per pass and camera, each the median of `repeats`), timer (what measured
 // them), and what the browser offered.
@@ -125,30 +125,29 @@ async function run(config) {
   // The component: its group stays at the origin (its update resets the group's world
   // matrix to the identity, and its plane is the group's y = 0: the receiver).
   const options = config.caustics;
-  const caustics = Caustics(renderer, {
-    frames: Infinity, // we call update() ourselves, once per pass
-    causticsOnly: false,
-    ior: config.passes[0].ior,
-    backside: options.backside,
-    backsideIOR: options.backsideIOR,
-    worldRadius: options.worldRadius,
-    intensity: options.intensity,
-    color: new THREE.Color().setRGB(...options.color, THREE.LinearSRGBColorSpace),
-    resolution: options.resolution,
-    lightSource: new THREE.Vector3().fromArray(options.lightSource),
-    near: options.near,
-  });
-  world.add(caustics.group);
-  for (const name of config.objects) {
-    const node = named(root, name);
-    caustics.scene.attach(node); // keeps its world placement
-    node.traverse((o) => { o.castShadow = config.shadows; });
-  }
-  // The projected caustic lies on the receiver: draw it just in front of it (a
-  // depth offset, not a move) so the two coplanar surfaces do not z-fight.
-  const plane = caustics.group.getObjectByName("caustics_plane");
-  Object.assign(plane.material, { polygonOffset: true, polygonOffsetFactor: -1,
-    polygonOffsetUnits: -4 });
+  const objects = config.objects.map((name) => named(root, name));
+  for (const node of objects) node.traverse((o) => { o.castShadow = config.shadows; });
+  const component = (ior) => {
+    const made = Caustics(renderer, {
+      frames: 1, // drei's default: the caustic is computed once, on the first update
+      causticsOnly: false,
+      ior,
+      backside: options.backside,
+      backsideIOR: options.backsideIOR,
+      worldRadius: options.worldRadius,
+      intensity: options.intensity,
+      color: new THREE.Color().setRGB(...options.color, THREE.LinearSRGBColorSpace),
+      resolution: options.resolution,
+      lightSource: new THREE.Vector3().fromArray(options.lightSource),
+      near: options.near,
+    });
+    for (const node of objects) made.scene.attach(node); // keeps its world placement
+    return made;
+  };
+  const dispose = (made) => {
+    for (const t of [made.normalTarget, made.normalTargetB, made.causticsTarget,
+      made.causticsTargetB]) t.dispose();
+  };
 
   // Receivers: Lambertian, as the harness's (glTF's roughness-1 PBR material keeps a
   // specular lobe of F0 = 0.04).
@@ -166,7 +165,7 @@ async function run(config) {
   if (!light) throw new Error("the exported scene has no directional light");
   if (!config.directLighting) light.intensity = 0;
   const box = new THREE.Box3().setFromObject(root);
-  for (const name of config.objects) box.expandByObject(named(caustics.scene, name));
+  for (const node of objects) box.expandByObject(node);
   const sphere = box.getBoundingSphere(new THREE.Sphere());
   const toLight = new THREE.Vector3().fromArray(options.lightSource).normalize();
   // Shadow camera: the light's rays through the scene's bounding sphere.
@@ -208,18 +207,49 @@ async function run(config) {
     for (let i = 0; i < red.length; i++) red[i] = pixels[4 * i];
     return base64(red);
   };
+  // Per pass (IOR), a fresh component read after its first update, as drei renders
+  // with frames = 1. Its update is not repeatable as it stands: it reuses a matrix
+  // whose translation the previous update left behind when it places the far plane
+  // (far differs from the second update on; `farAfterRepeats` shows it), so the
+  // timed repeats run on a second instance, which is then discarded.
+  let shown = null;
+  const lightCameras = [];
+  const farAfterRepeats = [];
   for (const pass of config.passes) {
-    caustics.params.ior = pass.ior;
-    caustics.update(); // warm-up: shader compilation, first allocation
+    if (shown) {
+      world.remove(shown.group);
+      dispose(shown);
+    }
+    shown = component(pass.ior);
+    shown.update();
+    const cam = shown.helper.camera;
+    lightCameras.push({
+      projection: cam.projectionMatrix.elements.slice(),
+      view: cam.matrixWorldInverse.elements.slice(),
+      near: cam.near, far: cam.far, left: cam.left, right: cam.right,
+      top: cam.top, bottom: cam.bottom,
+    });
+    front.push(readRed(shown.causticsTarget));
+    back.push(options.backside ? readRed(shown.causticsTargetB) : null);
+    const timed = component(pass.ior);
+    timed.params.frames = Infinity; // update on every call
+    timed.update(); // warm-up
     const times = [];
     for (let i = 0; i < config.repeats; i++) {
-      times.push(clock(await timeWork(gl, timerExt, () => caustics.update(),
-        () => renderer.readRenderTargetPixels(caustics.causticsTarget, 0, 0, 1, 1, texel))));
+      times.push(clock(await timeWork(gl, timerExt, () => timed.update(),
+        () => renderer.readRenderTargetPixels(timed.causticsTarget, 0, 0, 1, 1, texel))));
     }
     timings.caustics.push(times);
-    front.push(readRed(caustics.causticsTarget));
-    back.push(options.backside ? readRed(caustics.causticsTargetB) : null);
+    farAfterRepeats.push(timed.helper.camera.far);
+    dispose(timed);
+    for (const node of objects) shown.scene.attach(node);
   }
+  world.add(shown.group);
+  // The projected caustic lies on the receiver: draw it just in front of it (a
+  // depth offset, not a move) so the two coplanar surfaces do not z-fight.
+  const plane = shown.group.getObjectByName("caustics_plane");
+  Object.assign(plane.material, { polygonOffset: true, polygonOffsetFactor: -1,
+    polygonOffsetUnits: -4 });
   // The camera image with the last pass's caustic texture on the receiver.
   const draw = () => {
     renderer.setRenderTarget(colorTarget);
@@ -234,19 +264,13 @@ async function run(config) {
   const image = new Float32Array(width * height * 4);
   renderer.readRenderTargetPixels(colorTarget, 0, 0, width, height, image);
 
-  const lightCamera = caustics.helper.camera;
   const pick = (list, key) => median(list.map((t) => t[key] ?? NaN));
   return {
     front,
     back,
     resolution: res,
-    lightCamera: {
-      projection: lightCamera.projectionMatrix.elements.slice(),
-      view: lightCamera.matrixWorldInverse.elements.slice(),
-      near: lightCamera.near, far: lightCamera.far,
-      left: lightCamera.left, right: lightCamera.right,
-      top: lightCamera.top, bottom: lightCamera.bottom,
-    },
+    lightCameras,
+    farAfterRepeats,
     plane: { position: plane.position.toArray(), scale: plane.scale.toArray() },
     camera: base64(image),
     width, height,
@@ -258,7 +282,7 @@ async function run(config) {
     },
     timer,
     repeats: config.repeats,
-    causticsType: caustics.causticsTarget.texture.type === THREE.FloatType ? "float32" : "float16",
+    causticsType: shown.causticsTarget.texture.type === THREE.FloatType ? "float32" : "float16",
     webgl: {
       renderer: (() => {
         const info = gl.getExtension("WEBGL_debug_renderer_info");

@@ -1,9 +1,9 @@
 """drei's Caustics rendered in headless Chromium on the glass sphere under the sun,
 small: the page, the maps the method hands the harness, and the camera image's units.
 
-Runs on the test session's Chromium (``tests/browser.py``) with the JavaScript
-workspace installed (``npm ci --prefix renderers/web``); without either it is skipped
-locally and fails on CI (``CI`` set).
+The render is the ``drei`` fixture's (``conftest.py``): the test session's Chromium
+with the JavaScript workspace installed; without either it is skipped locally and
+fails on CI (``CI`` set).
 
 Kind: physical requirements (flux kept, placement, units). The flux the component
 computes is its texture times a texel's area on the floor, taken here from the light
@@ -12,17 +12,12 @@ camera's extent the page reports and the light's angle, not from the mapping.
 
 from __future__ import annotations
 
-import dataclasses
 import math
-import os
 
 import numpy as np
 import pytest
 
-from renderers.drei import bundle, driver
-from renderers.drei.method import DreiMethod
-from scenes import load_scene, with_settings
-from tests.renderers.drei.scenes import AXIS_ON_FLOOR, SUN_SCENE
+from tests.renderers.drei.scenes import AXIS_ON_FLOOR
 from tests.renderers.drei.test_mapping import assert_caustic_at
 
 pytestmark = pytest.mark.physical_requirement
@@ -32,23 +27,8 @@ COS = 1.0 / math.sqrt(1.13)
 E0 = 5.0
 
 
-@pytest.fixture(scope="module")
-def drei(chromium):
-    """One small render of the sun scene (128² texture, 64² map, 48² camera)."""
-    reason = bundle.unavailable_reason() or driver.unavailable_reason()
-    if reason:
-        if os.environ.get("CI"):
-            pytest.fail(f"the drei page must run on CI: {reason}")
-        pytest.skip(reason)
-    scene = with_settings(load_scene(SUN_SCENE), {"caustic_map": 128,
-                                                  "receiver_map": [64, 64]})
-    scene = dataclasses.replace(scene, camera=dataclasses.replace(scene.camera,
-                                                                  resolution=(48, 48)))
-    return DreiMethod(browser=chromium, repeats=1).render_all(scene)
-
-
 def test_the_map_keeps_the_flux_the_component_computes(drei):
-    camera = drei.light_camera
+    camera = drei.light_cameras[0]
     texel = ((camera.right - camera.left) / drei.textures.shape[1]) ** 2 / COS
     computed = drei.textures.reshape(3, -1).sum(axis=1, dtype=np.float64) * texel
     held = drei.result.receivers[0].total_flux()
