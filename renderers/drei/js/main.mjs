@@ -181,7 +181,8 @@ async function run(config) {
 
   const camera = named(root, "camera");
   if (!camera.isPerspectiveCamera) throw new Error("the exported node camera is not a perspective camera");
-  camera.far = camera.position.distanceTo(sphere.center) + 2 * sphere.radius;
+  camera.far = camera.getWorldPosition(new THREE.Vector3()).distanceTo(sphere.center)
+    + 2 * sphere.radius;
   camera.aspect = width / height;
   camera.updateProjectionMatrix();
 
@@ -250,7 +251,8 @@ async function run(config) {
   const plane = shown.group.getObjectByName("caustics_plane");
   Object.assign(plane.material, { polygonOffset: true, polygonOffsetFactor: -1,
     polygonOffsetUnits: -4 });
-  // The camera image with the last pass's caustic texture on the receiver.
+  // The camera image with the last pass's caustic texture on the receiver (with one
+  // IOR per channel, that IOR's caustic in every channel: the component has one).
   const draw = () => {
     renderer.setRenderTarget(colorTarget);
     renderer.render(world, camera);
