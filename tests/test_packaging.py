@@ -16,8 +16,9 @@ FIRST_PARTY = {"harness", "renderers", "reports", "scenes"}
 #: Imported only inside functions that need an optional extra, with the message
 #: naming the extra (pymeshlab: the bunny); or only where that extra runs: pytest by
 #: the pytest plugin (harness/pytest_plugin.py), which pytest itself loads through its
-#: ``pytest11`` entry point.
-OPTIONAL = {"pymeshlab": "bunny", "pyluxcore": "crosscheck", "pytest": "test"}
+#: ``pytest11`` entry point; playwright by the drei-caustics method (renderers/drei).
+OPTIONAL = {"pymeshlab": "bunny", "pyluxcore": "crosscheck", "pytest": "test",
+            "playwright": "drei"}
 
 
 def _name(requirement: str) -> str:

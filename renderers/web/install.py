@@ -1,6 +1,8 @@
 """``python -m renderers.web.install``: ``npm ci`` in the project's JavaScript workspace
-(this folder), so that ``node_modules/`` holds exactly what ``package-lock.json`` pins.
-tox's set-up runs it; a machine without npm gets one clear line saying what to install.
+(this folder), so that ``node_modules/`` holds exactly what ``package-lock.json`` pins,
+then the drei-caustics page's bundle (esbuild, from those packages; kept in a cache
+folder, ``renderers/drei/bundle.py``). tox's set-up runs it; a machine without npm gets
+one clear line saying what to install.
 """
 
 from __future__ import annotations
@@ -9,6 +11,7 @@ import shutil
 import subprocess
 import sys
 
+from renderers.drei.bundle import DreiSetupError, ensure_bundle
 from renderers.web.validator import WORKSPACE
 
 __all__ = ["main"]
@@ -30,7 +33,13 @@ def main() -> int:
     if done.returncode != 0:
         print(f"caustics: npm ci in {WORKSPACE} failed (exit {done.returncode})",
               file=sys.stderr)
-    return done.returncode
+        return done.returncode
+    try:
+        print(f"caustics: drei-caustics page bundled: {ensure_bundle()}")
+    except DreiSetupError as error:
+        print(f"caustics: {error}", file=sys.stderr)
+        return 1
+    return 0
 
 
 if __name__ == "__main__":
