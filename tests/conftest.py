@@ -138,6 +138,7 @@ def pytest_configure(config):
         os.environ[CACHE_ENV] = fresh
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist reads the groups into the node ids
 def pytest_collection_modifyitems(config, items):
     """Under xdist's ``--dist loadgroup``, each test module runs on one worker (its
     module fixtures are built once), and every test that uses the browser runs on

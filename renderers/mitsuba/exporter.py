@@ -46,6 +46,7 @@ __all__ = [
     "emitter_dicts",
     "export_scene",
     "exported",
+    "mitsuba_mesh",
     "scene_dict",
     "sensor_dict",
 ]
@@ -178,7 +179,9 @@ def sensor_dict(camera: Camera, *, spp: int = 1, sample_count_film: bool = False
     }
 
 
-def _mesh(mi, name: str, mesh: TriangleMesh, bsdf: dict, *, texcoords: bool):
+def mitsuba_mesh(mi, name: str, mesh: TriangleMesh, bsdf: dict, *, texcoords: bool):
+    """A ``mi.Mesh`` named ``name`` holding ``mesh``'s positions (m), normals and
+    faces (and its (u, v) where ``texcoords``), with the BSDF ``bsdf`` (a Mitsuba dict)."""
     props = mi.Properties()
     props["bsdf"] = mi.load_dict(bsdf)
     out = mi.Mesh(name, len(mesh.positions), len(mesh.faces), props=props,
@@ -213,7 +216,7 @@ def scene_dict(
     mi, _, _ = _mi.load()
     if shape is None:
         def shape(name, mesh, bsdf, texcoords):
-            return _mesh(mi, name, mesh, bsdf, texcoords=texcoords)
+            return mitsuba_mesh(mi, name, mesh, bsdf, texcoords=texcoords)
     geometry = geometry or build_geometry(scene)
     desc: dict = {"type": "scene"}
     desc["integrator"] = integrator or {"type": "ptracer"}

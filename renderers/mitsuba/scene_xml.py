@@ -34,7 +34,7 @@ from xml.etree import ElementTree
 
 from renderers.mitsuba import _mi
 from renderers.mitsuba.bsdf import BSDF_NAME
-from renderers.mitsuba.exporter import ExportedScene, _mesh, exported, scene_dict
+from renderers.mitsuba.exporter import ExportedScene, exported, mitsuba_mesh, scene_dict
 from scenes import effects_of
 from scenes.geometry import build_geometry
 from scenes.model import Scene
@@ -93,7 +93,7 @@ def write_scene_xml(scene: Scene, folder: str | Path) -> tuple[Path, ...]:
 
     def ply(name, mesh, bsdf, texcoords):
         relative = f"meshes/{name}.ply"
-        _mesh(mi, name, mesh, bsdf, texcoords=texcoords).write_ply(str(folder / relative))
+        mitsuba_mesh(mi, name, mesh, bsdf, texcoords=texcoords).write_ply(str(folder / relative))
         return {"type": "ply", "filename": relative, "bsdf": bsdf}
 
     channels = [0, 1, 2] if "dispersion" in effects_of(scene) else [None]
