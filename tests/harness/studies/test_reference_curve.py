@@ -53,12 +53,13 @@ def test_one_photon_kernel_serves_every_budget():
 @pytest.mark.bench
 def test_warm_curve_grows_with_the_budget():
     """A benchmark (``tox -e bench``: a wall-clock ratio, which a machine shared with
-    other jobs can push below the bound, so not in the default run). The photon
-    tracer's work is proportional to the photons it traces, so once compilation and
-    scene building are out of the warm time, 64 x the photons take at least 16 x the warm time (a quarter of the
-    proportional 64 x; the rest is what a launch costs whatever its size). Before the
-    fix the curve was flat at about 0.5 s of one-off costs, which cold times now add to every budget
-    instead (build: the Mitsuba scene and its BVH, never free)."""
+    other jobs can push below the bound, so not in the default run). The photon tracer's
+    work is proportional to the photons it traces, so once compilation and scene
+    building are out of the warm time, 64 x the photons take at least 16 x the warm time
+    (a quarter of the proportional 64 x; the rest is what a launch costs whatever its
+    size). Before the fix the curve was flat at about 0.5 s of one-off costs, which cold
+    times now add to every budget instead (build: the Mitsuba scene and its BVH, never
+    free)."""
     scene = _glass_sphere()
     # The curve's error needs a reference: a converged-enough map from another seed.
     reference = PhotonTracer(scene, caustic_only=True).trace(1 << 21, seed=77)
