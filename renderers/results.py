@@ -78,6 +78,13 @@ class RenderResult:
         Which clock produced ``timings`` (e.g. ``"ctx.finish + perf_counter"``).
     metadata : dict
         JSON-serialisable extras: passes run, event chains, photons, seeds, versions.
+    records : dict of str to ndarray or None
+        Per-vertex light-path records of a renderer that traces light from a vertex
+        grid (caustics mapping; None for the others): ``status`` (K,), ``origin``
+        (K, 3) m, ``direction`` (K, 3), ``receiver`` (K,) and ``flux`` (K, 3) W, each
+        vertex's flux at the share its splats draw, so the splatted vertices' flux is
+        what the maps received. The stability checks and the method's flux budget read
+        them.
     """
 
     renderer: str
@@ -87,6 +94,7 @@ class RenderResult:
     timings: dict[str, float] = field(default_factory=dict)
     timer: str = ""
     metadata: dict[str, Any] = field(default_factory=dict)
+    records: dict[str, np.ndarray] | None = field(default=None, repr=False)  # large arrays
 
 
 def caustic_region(reference: np.ndarray, *, fraction: float = CAUSTIC_FRACTION) -> np.ndarray:

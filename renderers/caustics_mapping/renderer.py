@@ -74,8 +74,8 @@ class Frame:
         """Grid and rim-patch vertices together, for flux accounts: ``status``,
         ``origin``, ``direction``, ``receiver`` and ``flux`` (K, 3) W, each vertex's
         flux times its ``share``, so the splatted vertices' flux is what the maps
-        received."""
-        return _traced_records(self.hits, self.patches)
+        received (the result's ``records``)."""
+        return self.result.records
 
 
 def _traced_records(hits: dict[str, np.ndarray],
@@ -93,7 +93,7 @@ def _traced_records(hits: dict[str, np.ndarray],
 
 def render_frame(
     scene: Scene, *, ctx: moderngl.Context | None = None,
-    geometry: SceneGeometry | None = None, lookups: bool = True,
+    geometry: SceneGeometry | None = None, lookups: bool = True, atlas: bool = True,
 ) -> Frame:
     """Render ``scene`` with caustics mapping; see :class:`Frame`.
 
@@ -106,20 +106,24 @@ def render_frame(
     lookups : bool
         Read the receiver positions atlases back into ``Frame.lookups`` (for the
         NumPy mirror); off in :func:`render`, where nothing needs them.
+    atlas : bool
+        Splat and read back the light-space caustic-map atlas (``Frame.caustic_map``)
+        also where the camera does not read it (``caustic_lookup = "receivers"``): an
+        extra pass, off in :func:`render`, which draws only the passes the method needs.
 
     Raises
     ------
     GLError
         A pass left a GL error.
     """
-    return _frame(scene, ctx, geometry, want_lookups=lookups, want_atlas=True)
+    return _frame(scene, ctx, geometry, want_lookups=lookups, want_atlas=atlas)
 
 
 def render(scene: Scene, *, ctx: moderngl.Context | None = None,
            geometry: SceneGeometry | None = None) -> RenderResult:
-    """Render ``scene``; the :class:`RenderResult` of :func:`render_frame` (without
-    reading back what only the :class:`Frame` holds: the caustic-map atlas and the
-    positions atlases)."""
+    """Render ``scene``; the :class:`RenderResult` of :func:`render_frame` (its
+    ``records`` included), drawing and reading back only what the result needs (no
+    caustic-map atlas where the camera does not read it, no positions atlases)."""
     return _frame(scene, ctx, geometry, want_lookups=False, want_atlas=False).result
 
 
@@ -166,8 +170,8 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
 
     merged = _merge(acc.hits, s.iterations)
     patches = _merge(acc.patches, s.iterations) if acc.patches else {}
-    metadata = _metadata(state, merged=merged, records=_traced_records(merged, patches),
-                         lights=lights)
+    records = _traced_records(merged, patches)
+    metadata = _metadata(state, merged=merged, records=records, lights=lights)
     result = RenderResult(
         renderer="caustics_mapping", camera=acc.camera,
         receivers=tuple(ReceiverMap(m, g.extent)
@@ -176,6 +180,7 @@ def _render(scene: Scene, ctx: moderngl.Context, geometry: SceneGeometry,
         # GPU time per pass from GL timer queries, where they are valid (hardware).
         metadata=metadata.as_dict() | ({"gpu_timings": dict(timer.gpu_timings)}
                                        if timer.gpu_timings else {}),
+        records=records,
     )
     caustic_total = acc.caustic_total
     if caustic_total is None:
