@@ -11,18 +11,26 @@ the same way (``[project.entry-points."caustics_harness.methods"]``), after whic
 
 The entry point names an object with the :class:`Method` protocol, or a class or
 other callable without arguments that returns one.
+
+Every method is rendered through its protocol's :meth:`Method.render`, the presets
+too. A method that renders with the caustics-mapping renderer may also have the
+capability :class:`GLMethod` ("has a GL runner"): :meth:`GLMethod.in_context` gives
+the same method rendering in a GL context and on meshes that the caller holds, so
+that the harness renders it, and the caustics-mapping studies render its settings,
+in one context (``harness.studies.runner.RealtimeRunner``).
 """
 
 from __future__ import annotations
 
 from importlib.metadata import entry_points
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 from renderers.results import RenderResult
 from scenes import Scene
 from scenes.errors import HarnessError
 
-__all__ = ["GROUP", "Method", "MethodError", "available_methods", "load_method"]
+__all__ = ["GROUP", "GLMethod", "Method", "MethodError", "available_methods", "has_gl_runner",
+           "load_method"]
 
 #: The entry-point group methods register in.
 GROUP = "caustics_harness.methods"
@@ -42,14 +50,10 @@ class Method(Protocol):
         The name it is registered under.
     description : str
         One line for reports.
-    studies : bool
-        Whether the caustics-mapping studies (convergence, cost) apply: only methods
-        that render with the caustics-mapping renderer's settings set it.
     """
 
     name: str
     description: str
-    studies: bool
 
     def configure(self, scene: Scene) -> Scene:
         """The scene with this method's settings applied (recorded in the report)."""
@@ -58,6 +62,31 @@ class Method(Protocol):
     def render(self, scene: Scene) -> RenderResult:
         """Render ``scene`` (as returned by :meth:`configure`)."""
         ...
+
+
+@runtime_checkable
+class GLMethod(Method, Protocol):
+    """The capability of a method with a GL runner: it renders with the
+    caustics-mapping renderer, at the settings its :meth:`~Method.configure` gives
+    the scene, and can do so in a GL context that the caller holds.
+
+    The harness then renders it in one context for the warm-up and every timed
+    render, and the caustics-mapping studies (convergence, cost, decomposition)
+    apply to it: they render its configured scene under other settings in that
+    context (``harness.studies.runner.RealtimeRunner``) and so describe this method.
+    """
+
+    def in_context(self, ctx: Any, *, geometry: Any = None) -> GLMethod:
+        """This method, its :meth:`~Method.render` drawing in ``ctx`` (a moderngl
+        context the caller made and releases) on ``geometry`` (the
+        :class:`scenes.geometry.SceneGeometry` of the scenes it is given; None: built
+        per render)."""
+        ...
+
+
+def has_gl_runner(method: Method) -> bool:
+    """Whether ``method`` has the capability :class:`GLMethod`."""
+    return isinstance(method, GLMethod)
 
 
 def available_methods() -> tuple[str, ...]:
@@ -84,5 +113,5 @@ def load_method(name: str) -> Method:
     method = target
     if not isinstance(method, Method):
         raise MethodError(f"entry point {found[0].value!r} of method {name!r} is not a "
-                          "method (needs name, description, studies, configure, render)")
+                          "method (needs name, description, configure, render)")
     return method

@@ -8,8 +8,9 @@ The stages, in order (``docs/architecture.md``):
    preset its choices);
 2. **references** — the Mitsuba reference (cached, shared by every method) and an
    independent one on disjoint seeds (the noise floor);
-3. **render** — the method's render, timed by the one timing function
-   (:func:`harness.compare.timed.timed_render`);
+3. **render** — the method's render through its protocol's ``render``, timed by the
+   one timing function (:func:`harness.compare.timed.timed_render`; a method with a
+   GL runner in the runner's context, which its studies share);
 4. **score** — every metric per view and region, stability, flux budgets
    (:func:`harness.compare.scoring.score_render`);
 5. **studies** — each registered study the options name that applies to the method
@@ -26,8 +27,6 @@ own) and runs the rest.
 
 from __future__ import annotations
 
-import contextlib
-from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -38,9 +37,8 @@ from harness.compare.headlines import with_headlines
 from harness.compare.provenance import provenance
 from harness.compare.scoring import References, Scored, require_caustic, score_render
 from harness.compare.studies import Study, StudyContext, registered_studies
-from harness.compare.timed import TimedRender, timed_render
+from harness.compare.timed import TimedRender, gl_runner, timed_render
 from harness.crosscheck import run_crosscheck
-from harness.studies.runner import RealtimeRunner
 from harness.studies.timing import MIN_REPEATS
 from renderers.methods import Method
 from renderers.mitsuba.reference import render_reference
@@ -151,18 +149,6 @@ def render_references(scene: Scene, options: CompareOptions = CompareOptions()) 
                                        **kwargs))
 
 
-@contextlib.contextmanager
-def _runner(scene: Scene, method: Method, repeats: int, needed: bool
-            ) -> Iterator[RealtimeRunner | None]:
-    """The caustics-mapping runner when the method renders with caustics mapping and
-    something needs it; else None."""
-    if not (method.studies and needed):
-        yield None
-        return
-    with RealtimeRunner(scene, repeats=repeats) as runner:
-        yield runner
-
-
 def _studies(context: StudyContext, studies: list[Study]) -> dict[str, Section]:
     """Run ``studies`` in order; each sees the sections of those before it."""
     for study in studies:
@@ -212,7 +198,8 @@ def run_comparison(scene: Scene, method: Method, *,
     references = references or render_references(scene, options)
     wanted = [s for s in registered_studies()
               if s.name in options.selected and s.applies(method)]
-    with _runner(scene, method, options.repeats, render is None or bool(wanted)) as runner:
+    with gl_runner(method, scene, repeats=options.repeats,
+                   needed=render is None or bool(wanted)) as runner:
         geometry = runner.geometry if runner is not None else build_geometry(scene)
         render = render or timed_render(method, scene, repeats=options.repeats, runner=runner)
         scored = score_render(scene, geometry, render, references)

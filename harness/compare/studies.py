@@ -42,7 +42,7 @@ from harness.studies.decomposition import DecompositionOptions, decomposition_st
 from harness.studies.runner import RealtimeRunner
 from harness.studies.temporal import TemporalOptions, temporal_study
 from harness.terminal import plain
-from renderers.methods import Method
+from renderers.methods import Method, has_gl_runner
 from reports.records import ConvergenceSection, CostSection, RecordSection, Section
 from scenes import Scene
 from scenes.animation import animation_of
@@ -78,8 +78,8 @@ class StudyContext:
     scored : Scored
         The metrics, images and stability of the render.
     runner : RealtimeRunner or None
-        The caustics-mapping runner (its GL context and settings), for methods that
-        render with caustics mapping.
+        The method's GL runner (its GL context and settings), for methods with one
+        (:func:`renderers.methods.has_gl_runner`).
     options : object
         The comparison's options (:class:`harness.compare.pipeline.CompareOptions`).
     sections : dict of str to Section
@@ -149,8 +149,8 @@ class ConvergenceStudy:
     name, optional = "convergence", False
 
     def applies(self, method: Method) -> bool:
-        """Caustics-mapping methods only (their estimators are swept)."""
-        return bool(method.studies)
+        """Methods with a GL runner only (their estimators are swept in it)."""
+        return has_gl_runner(method)
 
     def run(self, context: StudyContext) -> Section:
         """Convergence table and claims, over receiver 0's scene caustic region."""
@@ -181,8 +181,8 @@ class CostStudy:
     name, optional = "cost", False
 
     def applies(self, method: Method) -> bool:
-        """Caustics-mapping methods only (their settings are swept)."""
-        return bool(method.studies)
+        """Methods with a GL runner only (their settings are swept in it)."""
+        return has_gl_runner(method)
 
     def run(self, context: StudyContext) -> Section:
         """The sweep, the speedups warm and cold, and the timing policy."""
@@ -243,8 +243,8 @@ class DecompositionStudy:
     name, optional = "decomposition", True
 
     def applies(self, method: Method) -> bool:
-        """Caustics-mapping methods only (their passes are swapped step by step)."""
-        return bool(method.studies)
+        """Methods with a GL runner only (their passes are swapped step by step)."""
+        return has_gl_runner(method)
 
     def run(self, context: StudyContext) -> Section:
         """The waterfall; its noise floor is the measured one of receiver 0."""

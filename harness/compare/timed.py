@@ -1,30 +1,38 @@
 """The one timing function: a method's render, warm, as ``compare``, sweep rows and
 third-party methods all time it.
 
-Policy (both sides of every comparison are timed this way; ``docs/statistics.md``,
-"Timing"): one untimed warm-up render (shader compilation, first-call set-up), then
-``repeats`` timed renders; the warm time is their median.
+Every method, the caustics-mapping presets included, is rendered through its
+protocol's ``render`` (:class:`renderers.methods.Method`); :func:`render_method` is
+that one road. Policy (both sides of every comparison are timed this way;
+``docs/statistics.md``, "Timing"): one untimed warm-up render (shader compilation,
+first-call set-up), then ``repeats`` timed renders; the warm time is their median.
 
-* A caustics-mapping preset renders through a :class:`~harness.studies.runner.RealtimeRunner`
-  (one GL context and one geometry build for every configuration): the clock is the
-  sum of the frame's per-pass times, each pass bracketed by ``ctx.finish()`` and
+* A method with a GL runner (:class:`renderers.methods.GLMethod`, the presets)
+  renders in the runner's GL context (:func:`gl_runner`: one context and one
+  geometry build for the render and the studies): the clock is the sum of the
+  frame's per-pass times, each pass bracketed by ``ctx.finish()`` and
   ``time.perf_counter`` on llvmpipe (GL timer queries where they are valid).
-* Any other method: ``time.perf_counter`` around its ``render`` call, which also holds
-  whatever set-up the method repeats per call (the timer says so).
+* Any other method: the sum of the passes it reports (``RenderResult.timings``), or
+  else ``time.perf_counter`` around its ``render`` call, which also holds whatever
+  set-up the method repeats per call (the timer says so).
 """
 
 from __future__ import annotations
 
+import contextlib
 import statistics
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from typing import Any
 
 from harness.studies.runner import RealtimeRunner, caustic_seconds, frame_seconds
-from renderers.methods import Method
+from renderers.methods import Method, has_gl_runner
 from renderers.results import RenderResult
 from scenes import Scene
+from scenes.geometry import SceneGeometry
 
-__all__ = ["TimedRender", "timed_render"]
+__all__ = ["TimedRender", "gl_runner", "render_method", "timed_render"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,14 +48,16 @@ class TimedRender:
     timer : str
         What ``warm_seconds`` measured, with which clock.
     hits : dict of ndarray or None
-        The caustics-mapping per-vertex records, grid and rim patches, each vertex's
-        flux at the share its splats draw (``Frame.traced_records``; for the
-        stability checks and the flux budget).
+        A method with a GL runner: its render's per-vertex records
+        (``RenderResult.records``: grid and rim patches, each vertex's flux at the
+        share its splats draw; for the stability checks and the flux budget). None
+        for any other method, even one whose result carries records of a render it
+        wraps (they would not describe its maps).
     maps_seconds : float or None
         Median time of the passes that make the receiver maps (s): the scope of the
-        equal-error speedup (caustics mapping only).
+        equal-error speedup (methods with a GL runner only).
     gl_renderer : str or None
-        The OpenGL renderer (llvmpipe, an NVIDIA GPU), for caustics mapping.
+        The OpenGL renderer (llvmpipe, an NVIDIA GPU), for methods with a GL runner.
     """
 
     result: RenderResult
@@ -58,6 +68,41 @@ class TimedRender:
     gl_renderer: str | None = None
 
 
+@contextlib.contextmanager
+def gl_runner(method: Method, scene: Scene, *, repeats: int, needed: bool = True,
+              context: Callable[[], Any] | None = None) -> Iterator[RealtimeRunner | None]:
+    """The GL runner of ``scene`` (as ``method.configure`` returned it), rendering
+    ``repeats`` timed frames per configuration, when the method has one
+    (:func:`renderers.methods.has_gl_runner`) and ``needed``; else None.
+    ``context``: gives the GL context to render in and keep (a sweep worker's, made
+    once per process); None: the runner makes and releases its own."""
+    if not (needed and has_gl_runner(method)):
+        yield None
+        return
+    ctx = context() if context is not None else None
+    with RealtimeRunner(scene, repeats=repeats, ctx=ctx) as runner:
+        yield runner
+
+
+def render_method(method: Method, scene: Scene, *, ctx: Any = None,
+                  geometry: SceneGeometry | None = None) -> RenderResult:
+    """One render of ``scene`` by ``method``, through its protocol's ``render``: with
+    ``ctx``, a method with a GL runner draws in that GL context on ``geometry``
+    (:meth:`renderers.methods.GLMethod.in_context`).
+
+    Raises
+    ------
+    ValueError
+        ``ctx`` for a method without a GL runner.
+    """
+    if ctx is None:
+        return method.render(scene)
+    if not has_gl_runner(method):
+        raise ValueError(f"method {method.name!r} has no GL runner: it renders in no "
+                         "GL context of the caller's")
+    return method.in_context(ctx, geometry=geometry).render(scene)
+
+
 def timed_render(method: Method, scene: Scene, *, repeats: int,
                  runner: RealtimeRunner | None = None) -> TimedRender:
     """Render ``scene`` (as ``method.configure`` returned it) once untimed, then
@@ -66,36 +111,38 @@ def timed_render(method: Method, scene: Scene, *, repeats: int,
     Parameters
     ----------
     method : Method
-        The method; a caustics-mapping preset (``method.studies``) needs ``runner``.
+        The method; one with a GL runner (:func:`renderers.methods.has_gl_runner`)
+        needs ``runner``.
     scene : Scene
         The configured scene.
     repeats : int
         Timed renders (the median is kept), at least 1.
     runner : RealtimeRunner, optional
-        The caustics-mapping runner of ``scene`` (its GL context and geometry).
+        The method's GL runner of ``scene`` (:func:`gl_runner`).
 
     Raises
     ------
     ValueError
-        A caustics-mapping method without a runner, or ``repeats < 1``.
+        A method with a GL runner without one, or ``repeats < 1``.
     """
     if repeats < 1:
         raise ValueError(f"repeats must be >= 1, got {repeats}")
-    if method.studies:
+    if has_gl_runner(method):
         if runner is None:
-            raise ValueError(f"method {method.name!r} renders with caustics mapping: "
-                             "timed_render needs its RealtimeRunner")
-        frame, seconds = runner.timed()
-        return TimedRender(frame.result, seconds,
-                           f"sum of the passes ({frame.result.timer}), median of {repeats} "
-                           "after a warm-up", frame.traced_records(),
+            raise ValueError(f"method {method.name!r} has a GL runner: timed_render needs "
+                             "it (harness.compare.timed.gl_runner)")
+        result, seconds = runner.timed_method(lambda: render_method(
+            method, scene, ctx=runner.ctx, geometry=runner.geometry))
+        return TimedRender(result, seconds,
+                           f"sum of the passes ({result.timer}), median of {repeats} "
+                           "after a warm-up", result.records,
                            runner.median(clock=caustic_seconds),
                            runner.ctx.info.get("GL_RENDERER", "unknown"))
-    method.render(scene)
+    render_method(method, scene)
     walls, sums, result = [], [], None
     for _ in range(repeats):
         start = time.perf_counter()
-        result = method.render(scene)
+        result = render_method(method, scene)
         walls.append(time.perf_counter() - start)
         sums.append(frame_seconds(result.timings))
     if result.timings:

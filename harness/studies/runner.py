@@ -7,22 +7,31 @@ its warm time is the method's ``t_compile``; :mod:`harness.studies.timing`). Fra
 time is the sum of the per-pass times the renderer reports (on llvmpipe:
 ``ctx.finish()`` around each pass and ``time.perf_counter``; the renderer's
 ``timer`` field says which); the receiver-map pass includes the maps' read-back.
+
+A frame draws the passes the method's own render draws (no caustic-map atlas that the
+camera does not read), so that the method's render, which the comparison times in
+the runner's context (:meth:`RealtimeRunner.timed_method`), is the runner's
+configuration without overrides.
 """
 
 from __future__ import annotations
 
 import statistics
 import time
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 from harness.studies.timing import OneOffCosts
 from renderers.caustics_mapping.context import create_context
 from renderers.caustics_mapping.presets import resolve_scene
 from renderers.caustics_mapping.renderer import render_frame
+from renderers.results import RenderResult
 from scenes import Scene, with_settings
 from scenes.geometry import build_geometry
 
 __all__ = ["CAMERA_PASSES", "RealtimeRunner", "caustic_seconds", "frame_seconds"]
+
+_T = TypeVar("_T")
 
 #: Passes that only serve the camera image, not the receiver irradiance maps.
 CAMERA_PASSES = ("camera", "camera_backfaces", "shadow_map")
@@ -80,23 +89,39 @@ class RealtimeRunner:
             self.ctx.release()
 
     def render(self, **overrides: Any):
-        """One frame (``renderers.caustics_mapping.renderer.Frame``) with overrides."""
+        """One frame (``renderers.caustics_mapping.renderer.Frame``) with overrides:
+        the passes the method's render draws, no positions atlases read back."""
 
         scene = with_settings(self.scene, overrides) if overrides else self.scene
-        return render_frame(scene, ctx=self.ctx, geometry=self.geometry)
+        return render_frame(scene, ctx=self.ctx, geometry=self.geometry, lookups=False,
+                            atlas=False)
 
     def timed(self, *, clock=frame_seconds, **overrides: Any):
         """(frame, seconds): the median of ``clock(timings)`` over ``repeats``
         renders, after an untimed warm-up render on first use of these overrides
         (shader compilation is not a frame cost). ``clock`` is
         :func:`frame_seconds` or :func:`caustic_seconds`."""
-        key = tuple(sorted(overrides.items()))
+        return self._time(tuple(sorted(overrides.items())),
+                           lambda: self.render(**overrides), lambda f: f.result.timings,
+                           clock)
+
+    def timed_method(self, render: Callable[[], RenderResult], *,
+                     clock=frame_seconds) -> tuple[RenderResult, float]:
+        """(result, seconds): ``render``, a method's own render of :attr:`scene` in
+        :attr:`ctx`, timed as :meth:`timed` times a configuration. It is booked as the
+        configuration without overrides (the same passes on the same scene): a study's
+        :meth:`timed` of it needs no second warm-up, and :meth:`one_off` reads its
+        first render."""
+        return self._time((), render, lambda r: r.timings, clock)
+
+    def _time(self, key: tuple, render: Callable[[], _T],
+               timings: Callable[[_T], dict[str, float]], clock) -> tuple[_T, float]:
         if key not in self._first:
-            self._first[key] = self.render(**overrides).result.timings
-        frames = [self.render(**overrides) for _ in range(self.repeats)]
-        self._timed[key] = [f.result.timings for f in frames]
+            self._first[key] = timings(render())
+        outputs = [render() for _ in range(self.repeats)]
+        self._timed[key] = [timings(o) for o in outputs]
         seconds = statistics.median(clock(t) for t in self._timed[key])
-        return frames[-1], seconds
+        return outputs[-1], seconds
 
     def median(self, *, clock=frame_seconds, **overrides: Any) -> float:
         """The median of ``clock(timings)`` over the renders :meth:`timed` last

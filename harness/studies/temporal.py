@@ -39,6 +39,7 @@ import numpy as np
 
 from harness.compare.evaluate import exposure_for
 from harness.compare.regions import caustic_region
+from harness.compare.timed import render_method
 from harness.metrics import (
     MetricInputError,
     flicker_map,
@@ -52,8 +53,7 @@ from harness.metrics import (
     structural_similarity,
 )
 from harness.studies.runner import frame_seconds
-from renderers.caustics_mapping.renderer import render
-from renderers.methods import Method
+from renderers.methods import Method, has_gl_runner
 from renderers.mitsuba.sequence import render_reference_frames
 from renderers.results import RenderResult
 from reports.records import Table
@@ -101,15 +101,17 @@ class TemporalOptions:
 
 
 def _renderer(method: Method, ctx) -> Callable[[Scene], RenderResult]:
-    """One frame of the method: a caustics-mapping preset renders in the study's GL
-    context (one context for the sequence), any other method through its protocol."""
-    if ctx is None or not method.studies:
-        return method.render
+    """One frame of the method, through its protocol's ``render``
+    (:func:`harness.compare.timed.render_method`): a method with a GL runner draws in
+    the study's GL context ``ctx`` (one context for the sequence) on the frame's
+    meshes (any other method ignores ``ctx``)."""
+    ctx = ctx if has_gl_runner(method) else None
 
-    def render_in_context(frame: Scene) -> RenderResult:
-        return render(method.configure(frame), ctx=ctx, geometry=build_geometry(frame))
+    def render_frame(frame: Scene) -> RenderResult:
+        geometry = build_geometry(frame) if ctx is not None else None
+        return render_method(method, frame, ctx=ctx, geometry=geometry)
 
-    return render_in_context
+    return render_frame
 
 
 def _method_frames(frames: list[Scene], render: Callable[[Scene], RenderResult], tick):
@@ -287,7 +289,8 @@ def temporal_study(scene: Scene, method: Method, *, options: TemporalOptions = T
     scene : Scene
         The scene as the method configured it (its settings hold the preset's choices).
     method : Method
-        The method; a caustics-mapping preset renders in ``ctx`` when given.
+        The method; one with a GL runner (a caustics-mapping preset) renders in
+        ``ctx`` when given.
     options : TemporalOptions
     ctx : moderngl.Context, optional
         The GL context of the comparison, shared by every frame.

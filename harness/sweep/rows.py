@@ -17,8 +17,7 @@ from dataclasses import dataclass
 
 from harness.compare.pipeline import CompareOptions, run_comparison
 from harness.compare.scoring import References
-from harness.compare.timed import TimedRender, timed_render
-from harness.studies.runner import RealtimeRunner
+from harness.compare.timed import TimedRender, gl_runner, timed_render
 from harness.sweep.worker import gl_context, worker_name
 from renderers.methods import load_method
 from renderers.results import RenderResult
@@ -55,15 +54,15 @@ class RowRender:
 
 def render_row(scene: Scene, method_name: str, *, repeats: int) -> RowRender:
     """Render ``scene`` (already configured by the method) once untimed, then
-    ``repeats`` times, timed; a Dask task (see the module docstring)."""
+    ``repeats`` times, timed, as the comparison pipeline does (a method with a GL
+    runner in this worker's GL context, made once per process); a Dask task (see the
+    module docstring)."""
     method = load_method(method_name)
-    if not method.studies:
-        return RowRender(timed_render(method, scene, repeats=repeats), worker_name())
-    with RealtimeRunner(scene, repeats=repeats, ctx=gl_context()) as runner:
+    with gl_runner(method, scene, repeats=repeats, context=gl_context) as runner:
         timed = timed_render(method, scene, repeats=repeats, runner=runner)
     # A local cluster shares the cores out (harness.sweep.worker): say so.
     share = os.environ.get("LP_NUM_THREADS")
-    if share:
+    if share and runner is not None:
         timed = TimedRender(timed.result, timed.warm_seconds,
                             f"{timed.timer}; llvmpipe threads {share}", timed.hits,
                             timed.maps_seconds, timed.gl_renderer)

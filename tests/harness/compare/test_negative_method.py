@@ -35,7 +35,6 @@ class WithNegatives:
     """A test plug-in method: the reference on other seeds with ``PIXELS`` camera
     pixels of one row set to ``NEGATIVE`` in every channel."""
 
-    studies = False
     name = "negatives"
     description = "an independent reference with a few negative camera pixels"
 

@@ -90,7 +90,7 @@ def test_compare_sweep_and_a_third_party_method_score_through_one_function(tmp_p
     class Halved:
         """A third-party method given as an object, not an entry point."""
 
-        name, description, studies = "halved", "the paper preset's render, halved", False
+        name, description = "halved", "the paper preset's render, halved"
 
         def configure(self, scene):
             return paper.configure(scene)

@@ -38,8 +38,6 @@ class FromReference:
     """A test plug-in method: a high-photon Mitsuba reference on other seeds,
     optionally scaled (``scale`` 1.02: a 2 % bias)."""
 
-    studies = False
-
     def __init__(self, *, scale: float, cache: str):
         self.scale, self.cache = scale, cache
         self.name = f"reference-x{scale:g}"

@@ -15,7 +15,6 @@ class DoubledPaper:
 
     name = "toy-double"
     description = "test plug-in: the paper preset's render, doubled"
-    studies = False
 
     def configure(self, scene):
         return load_method("paper").configure(scene)

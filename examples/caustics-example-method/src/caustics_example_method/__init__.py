@@ -1,8 +1,8 @@
 """An example caustics method for the harness: the ``strong`` caustics-mapping preset
 with every receiver's caustic irradiance map scaled by a factor (1 by default).
 
-A method is an object with ``name``, ``description``, ``studies``, ``configure(scene)``
-and ``render(scene)`` (``renderers.methods.Method``); this package registers
+A method is an object with ``name``, ``description``, ``configure(scene)`` and
+``render(scene)`` (``renderers.methods.Method``); this package registers
 :class:`ExampleMethod` in the entry-point group ``caustics_harness.methods`` as
 ``example`` (``pyproject.toml``), and the tests build a broken variant with
 ``ExampleMethod(scale=1.05)``.
@@ -30,8 +30,6 @@ class ExampleMethod:
     """
 
     description = "example plug-in: the strong preset, caustic maps scaled"
-    #: The caustics-mapping studies (convergence, cost) do not apply to it.
-    studies = False
 
     def __init__(self, scale: float = 1.0, name: str | None = None):
         self.scale = float(scale)
