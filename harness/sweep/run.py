@@ -10,8 +10,10 @@ worker's loss must not take the only copy). Renders go first, so the workers ren
 while the references trace.
 
 Everything is written by the client (this process), as each task's result
-arrives: a merged reference into the reference cache, a scored row with its page
-into the results cache, both atomically; a worker writes nothing. So a worker
+arrives: a merged reference into the reference cache
+(:func:`renderers.mitsuba.reference.cached_reference`, as ``caustics compare``
+caches its references), a scored row with its page into the results cache, both
+atomically; a worker writes nothing. So a worker
 killed mid-task loses nothing (Dask runs the task again elsewhere; a task whose
 worker dies three times is failed with ``KilledWorker``), and Ctrl-C leaves both
 caches with whole entries only.
@@ -41,11 +43,11 @@ from harness.sweep.plan import RowJob, SweepPlan, plan_sweep
 from harness.sweep.rows import render_row, row_values, score_row
 from harness.sweep.seeds import merge_reference, trace_seed
 from harness.terminal import error_line
-from renderers.mitsuba.cache import entry_lock, load_entry, write_result_dir
-from renderers.mitsuba.reference import CUT_WARNING, CutFluxWarning
+from renderers.mitsuba.reference import CUT_WARNING, CutFluxWarning, cached_reference
 from renderers.results import RenderResult
 from reports.build import write_page
 from reports.records import SceneComparison
+from scenes import Scene
 
 __all__ = ["PRIORITY", "RowResult", "SweepRun", "run_sweep"]
 
@@ -139,20 +141,16 @@ def _page_writer(comparison: SceneComparison) -> Callable[[Path], None]:
     return write
 
 
-def _store_reference(root: Path | None, result: RenderResult) -> None:
+def _store_reference(root: Path | None, scene: Scene, result: RenderResult) -> None:
     """Put a merged reference into the reference cache (unless an entry is there)."""
     fraction = result.metadata.get("cut_flux_fraction") or 0.0
     if fraction > CUT_WARNING:
         warnings.warn(f"{result.metadata.get('scene')}: the reference's safety cap cut off "
                       f"{fraction:.2e} of the emitted caustic flux", CutFluxWarning,
                       stacklevel=2)
-    if root is None:
-        return
-    key = result.metadata["hash"]
-    with entry_lock(root, key):
-        existing, _ = load_entry(root, key)
-        if existing is None:
-            write_result_dir(root / key, result)
+    if root is not None:
+        cached_reference(scene, key=result.metadata["hash"], root=root,
+                         render=lambda: result)
 
 
 class _Progress:
@@ -177,16 +175,6 @@ class _Progress:
     def close(self) -> None:
         if self.bar is not None:
             self.bar.close()
-
-
-def _cached_reference(root: Path | None, key: str) -> RenderResult | None:
-    if root is None:
-        return None
-    with entry_lock(root, key):
-        result, _ = load_entry(root, key)
-    if result is not None:
-        result.metadata["cache"] = "hit"
-    return result
 
 
 @dataclass
@@ -233,7 +221,8 @@ class _Runner:
         needed = dict.fromkeys(k for job in pending for k in (job.reference, job.independent))
         for key in needed:
             job = self.plan.references[key]
-            cached = _cached_reference(self.reference_root, key)
+            cached = (cached_reference(job.scene, key=key, root=self.reference_root)
+                      if self.reference_root is not None else None)
             if cached is not None:
                 # Scattered data cannot be recomputed: keep two copies, so that a
                 # worker killed mid-sweep does not take the only one with it.
@@ -282,7 +271,9 @@ class _Runner:
                 if future in graph.merges or future in row_of:
                     _settle(future)     # a seed is read only by its merge, through Dask
                 if future in graph.merges and future.status == "finished":
-                    _store_reference(self.reference_root, future.result())
+                    key = graph.merges[future]
+                    _store_reference(self.reference_root, self.plan.references[key].scene,
+                                     future.result())
                 elif future in row_of:
                     key = row_of[future]
                     done[key] = self.row(future, jobs[key])

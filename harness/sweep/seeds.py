@@ -25,16 +25,14 @@ photon count, noise and stop, wherever the stop rule does not hinge on timing
 target are traced but not used (seeds run in parallel, so the stop is known only at
 the merge); the result records how many rounds it used of how many traced.
 
-The camera image is traced by the merge, after the rounds: the camera tracer's
-caustic lookup maps take their photon count from the photons the receiver maps
-used (:func:`renderers.mitsuba.camera_trace.render_traced_camera`, called exactly
-as ``render_reference`` calls it), and only the merge knows that count. So the
-camera is not parallel over seeds; it is the same image a single process makes.
-
-The merged result is a :class:`renderers.results.RenderResult` with the same
-metadata as ``render_reference`` writes (:func:`renderers.mitsuba.reference.reference_metadata`
-of the rounds' estimate), so the client stores it in the reference cache under the
-same key: a later ``caustics compare`` of that scene finds it.
+The merge then makes the reference from the rounds' estimate exactly as
+``render_reference`` does (:func:`renderers.mitsuba.reference.reference_result`):
+the camera image, whose caustic lookup maps take their photon count from the
+photons the receiver maps used (only the merge knows that count, so the camera is
+not parallel over seeds; it is the same image a single process makes), and the same
+metadata. The client stores it in the reference cache under the same key
+(:func:`renderers.mitsuba.reference.cached_reference`): a later ``caustics compare``
+of that scene finds it.
 """
 
 from __future__ import annotations
@@ -46,11 +44,10 @@ import numpy as np
 
 from harness.sweep.worker import worker_name
 from renderers.mitsuba import mitsuba_versions
-from renderers.mitsuba.camera_trace import render_traced_camera
 from renderers.mitsuba.photons import DEFAULT_BATCH, PhotonTracer, launch_plan
-from renderers.mitsuba.reference import TIMER, ReceiverRounds, reference_metadata
+from renderers.mitsuba.reference import TIMER, ReceiverRounds, reference_result
 from renderers.results import RenderResult
-from scenes import Scene, effects_of
+from scenes import Scene
 from scenes.errors import HarnessError
 from scenes.geometry import build_geometry
 
@@ -216,26 +213,17 @@ def merge_reference(scene: Scene, key: str, versions: dict,
             extended += 1
     merged = time.perf_counter() - start
     estimate = rounds.estimate()
-    traced_camera = render_traced_camera(scene, photons=estimate.photons)
-    metadata = reference_metadata(scene, estimate, key=key, versions=versions,
-                                  camera_cut=traced_camera.cut_fraction,
-                                  camera_variance=traced_camera.variance,
-                                  lookup=traced_camera.plan)
-    metadata["cache"] = f"miss (merged from {len(batches)} seed tasks)"
-    metadata["sweep"] = {"seed_tasks": len(batches),
-                         "rounds_traced": len(first.photons) + extended,
-                         "rounds_traced_by_merge": extended,
-                         "rounds_used": rounds.rounds,
-                         "workers": sorted({b.worker for b in batches}),
-                         "merged_by": worker_name()}
-    timings = {"receiver_maps": estimate.history[-1][2],
-               "camera_lookup_maps": traced_camera.seconds["lookup_maps"],
-               "camera": traced_camera.seconds["camera"],
-               "merge": merged}
-    return RenderResult(
-        renderer="mitsuba", camera=traced_camera.image.astype(np.float32),
-        receivers=tuple(estimate.caustic),
-        effects=effects_of(scene), timings=timings,
+    result = reference_result(
+        scene, estimate, key=key, versions=versions, camera="trace",
+        timings={"receiver_maps": estimate.history[-1][2]},
         timer=f"{TIMER}; the starting budget's seeds traced in parallel, one task each: "
-              "the slowest seed's; launches past it and the camera traced by the merge",
-        metadata=metadata)
+              "the slowest seed's; launches past it and the camera traced by the merge")
+    result.timings["merge"] = merged
+    result.metadata["cache"] = f"miss (merged from {len(batches)} seed tasks)"
+    result.metadata["sweep"] = {"seed_tasks": len(batches),
+                                "rounds_traced": len(first.photons) + extended,
+                                "rounds_traced_by_merge": extended,
+                                "rounds_used": rounds.rounds,
+                                "workers": sorted({b.worker for b in batches}),
+                                "merged_by": worker_name()}
+    return result

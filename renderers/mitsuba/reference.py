@@ -25,12 +25,19 @@ camera rays through the counted specular chains, shaded with direct light and th
 caustic irradiance of its own per-seed lookup maps) or, with ``camera="ptracer"``,
 by Mitsuba's particle tracer (:mod:`.camera`: specular objects and all seen through
 them render black).
+
+One road for every reference, ``caustics compare`` and a sweep's alike: the receiver
+maps' estimate (:class:`ReceiverRounds`, traced in this process or as a sweep's
+per-seed tasks) becomes the reference through :func:`reference_result` (the camera
+image, the metadata), and the cache is read and written through
+:func:`cached_reference` (one lock per key).
 """
 
 from __future__ import annotations
 
 import time
 import warnings
+from collections.abc import Callable
 from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
@@ -77,9 +84,11 @@ __all__ = [
     "CutFluxWarning",
     "ReceiverEstimate",
     "ReceiverRounds",
+    "cached_reference",
     "cut_fraction",
     "estimate_receivers",
     "reference_metadata",
+    "reference_result",
     "render_reference",
     "stop_reason",
 ]
@@ -542,18 +551,30 @@ def _ptracer_camera(scene: Scene, geometry, *, progress: bool, timings: dict):
     return camera, camera_var, camera_cut
 
 
-def _render(scene: Scene, *, progress: bool, key: str, versions: dict,
-            camera: str) -> RenderResult:
-    geometry = build_geometry(scene)
-    timings = {}
-    start = time.perf_counter()
-    # Only the caustic maps are kept: no photon is spent on the direct light.
-    est = estimate_receivers(scene, progress=progress, caustic_only=True)
-    timings["receiver_maps"] = time.perf_counter() - start
+def reference_result(scene: Scene, estimate: ReceiverEstimate, *, key: str, versions: dict,
+                     camera: str = "trace", timings: dict[str, float], timer: str = TIMER,
+                     geometry=None, progress: bool = False) -> RenderResult:
+    """The reference of ``scene`` from its receiver maps' ``estimate``, however its
+    rounds were traced (in this process, or a sweep's seed tasks merged): the camera
+    image by ``camera`` (the camera tracer's lookup maps take their photon count from
+    the estimate's), the metadata (:func:`reference_metadata`, ``hash`` = ``key``) and
+    the result.
+
+    Parameters
+    ----------
+    timings
+        Seconds of the stages so far (the receiver maps'); the camera's are added.
+    timer
+        What ``timings`` measured.
+    geometry
+        The scene's meshes (built if None).
+    """
+    geometry = geometry or build_geometry(scene)
+    timings = dict(timings)
     lookup = None
     if camera == "trace":
         # Each seed traces its own lookup maps, scaled from the receiver maps' photons.
-        traced = render_traced_camera(scene, photons=est.photons, geometry=geometry,
+        traced = render_traced_camera(scene, photons=estimate.photons, geometry=geometry,
                                       progress=progress)
         image, camera_var, camera_cut = traced.image, traced.variance, traced.cut_fraction
         timings["camera_lookup_maps"] = traced.seconds["lookup_maps"]
@@ -563,18 +584,59 @@ def _render(scene: Scene, *, progress: bool, key: str, versions: dict,
         image, camera_var, camera_cut = _ptracer_camera(scene, geometry, progress=progress,
                                                         timings=timings)
     _warn_cut(scene, camera_cut, "camera image", CAMERA_MAX_EVENTS)
-    metadata = reference_metadata(scene, est, key=key, versions=versions,
+    metadata = reference_metadata(scene, estimate, key=key, versions=versions,
                                   camera_cut=camera_cut, camera_variance=camera_var,
                                   lookup=lookup)
     return RenderResult(
-        renderer="mitsuba", camera=image.astype(np.float32), receivers=tuple(est.caustic),
-        effects=effects_of(scene), timings=timings, timer=TIMER, metadata=metadata,
+        renderer="mitsuba", camera=image.astype(np.float32),
+        receivers=tuple(estimate.caustic), effects=effects_of(scene), timings=timings,
+        timer=timer, metadata=metadata,
     )
+
+
+def cached_reference(scene: Scene, *, key: str, root: Path, camera: str = "trace",
+                     render: Callable[[], RenderResult] | None = None
+                     ) -> RenderResult | None:
+    """The reference of ``scene`` in the cache at ``root`` under ``key``, else
+    ``render()``'s, written there; None without ``render``. The key's lock is held
+    throughout, so two processes that need one reference render it once (the other
+    waits, then reads it), and a reference another process wrote meanwhile is read,
+    not written again.
+
+    ``metadata["cache"]`` says ``"hit"`` or why it missed; on a hit
+    ``metadata["scene"]`` names ``scene`` (the key is the physics, not the name: a
+    renamed scene hits the entry). An entry recording another ``camera`` integrator
+    is a miss.
+    """
+    with entry_lock(root, key):
+        result, why = load_entry(root, key, camera=camera)
+        if result is not None:
+            result.metadata["cache"] = "hit"
+            result.metadata["scene"] = scene.name
+            return result
+        if render is None:
+            return None
+        result = render()
+        write_result_dir(root / key, result)
+        result.metadata["cache"] = f"miss ({why})"
+        return result
+
+
+def _render(scene: Scene, *, progress: bool, key: str, versions: dict,
+            camera: str) -> RenderResult:
+    geometry = build_geometry(scene)
+    start = time.perf_counter()
+    # Only the caustic maps are kept: no photon is spent on the direct light.
+    est = estimate_receivers(scene, progress=progress, caustic_only=True)
+    return reference_result(scene, est, key=key, versions=versions, camera=camera,
+                            timings={"receiver_maps": time.perf_counter() - start},
+                            geometry=geometry, progress=progress)
 
 
 def render_reference(scene: Scene, *, cache: str | Path | None = None, use_cache: bool = True,
                      progress: bool = True, camera: str = "trace") -> RenderResult:
-    """The Mitsuba reference of ``scene``, from the cache or rendered and cached.
+    """The Mitsuba reference of ``scene``, from the cache or rendered and cached
+    (:func:`cached_reference`).
 
     Parameters
     ----------
@@ -606,17 +668,11 @@ def render_reference(scene: Scene, *, cache: str | Path | None = None, use_cache
     check_camera(camera)
     versions = _mi.versions()
     key = cache_key(scene, versions, camera=camera)
-    if not use_cache:
+
+    def render() -> RenderResult:
         return _render(scene, progress=progress, key=key, versions=versions, camera=camera)
-    root = cache_dir(cache)
-    with entry_lock(root, key):
-        result, why = load_entry(root, key, camera=camera)
-        if result is not None:
-            result.metadata["cache"] = "hit"
-            # The key is the physics, not the name: a renamed scene hits the entry.
-            result.metadata["scene"] = scene.name
-            return result
-        result = _render(scene, progress=progress, key=key, versions=versions, camera=camera)
-        write_result_dir(root / key, result)
-        result.metadata["cache"] = f"miss ({why})"
-        return result
+
+    if not use_cache:
+        return render()
+    return cached_reference(scene, key=key, root=cache_dir(cache), camera=camera,
+                            render=render)
