@@ -1,5 +1,6 @@
 """One scene's comparison, data files and page, or its failure: a scene that fails
-costs its own row, never the run.
+costs its own row, never the run. Every comparison's outputs are written here, one
+way (:func:`write_outputs`), by ``compare``, the Python API and sweep rows alike.
 
 Whatever goes wrong inside one scene and method (a renderer error, a NaN that a
 later step cannot take, a bug) becomes a :class:`~reports.records.SceneFailure`:
@@ -22,7 +23,8 @@ from reports.plots import write_pdfs
 from reports.records import SceneComparison, SceneFailure
 from scenes import Scene, SceneError
 
-__all__ = ["FAILURE_JSON", "load_failure", "run_scene", "scene_failure", "write_failure"]
+__all__ = ["FAILURE_JSON", "load_failure", "run_scene", "scene_failure", "write_data",
+           "write_failure", "write_outputs"]
 
 #: Written into a failed scene's folder: the failure record as strict JSON.
 FAILURE_JSON = "failure.json"
@@ -55,11 +57,27 @@ def _failure_json(failure: SceneFailure) -> dict[str, Any]:
             "flux_budget": failure.flux_budget.records() if failure.flux_budget else None}
 
 
+def write_data(folder: Path, comparison: SceneComparison) -> None:
+    """A comparison's data files into ``folder``: ``metrics.json``, each table's CSV
+    file, the EXR originals (:func:`harness.compare.outputs.write_comparison`) and the
+    PDFs of its plots."""
+    write_comparison(folder, comparison)
+    write_pdfs(folder, comparison)
+
+
+def write_outputs(out_dir: Path, folder: str, comparison: SceneComparison, *,
+                  self_contained: bool = False) -> dict[str, Any]:
+    """A comparison's data files (:func:`write_data`) and page into
+    ``out_dir/folder``; returns the index row (:func:`reports.build.write_page`)."""
+    write_data(out_dir / folder, comparison)
+    return write_page(out_dir, comparison, folder=folder, self_contained=self_contained)
+
+
 def run_scene(out_dir: Path, folder: str, scene: Scene, method: str,
               compare: Callable[[], SceneComparison], *, self_contained: bool = False,
               ) -> tuple[SceneComparison | SceneFailure, dict[str, Any]]:
-    """Run ``compare`` and write its data files, PDFs and page into
-    ``out_dir/folder``; on any exception, the failure's page and ``failure.json``.
+    """Run ``compare`` and write its outputs into ``out_dir/folder`` (as
+    :func:`write_outputs`); on any exception, the failure's page and ``failure.json``.
 
     Returns
     -------
@@ -77,8 +95,7 @@ def run_scene(out_dir: Path, folder: str, scene: Scene, method: str,
             comparison, no_caustic = error.comparison, error
         stage = "data files"
         if comparison is not None:
-            write_comparison(out_dir / folder, comparison)
-            write_pdfs(out_dir / folder, comparison)
+            write_data(out_dir / folder, comparison)
         if no_caustic is not None:
             stage = "comparison"
             raise no_caustic

@@ -12,8 +12,9 @@ while the references trace.
 Everything is written by the client (this process), as each task's result
 arrives: a merged reference into the reference cache
 (:func:`renderers.mitsuba.reference.cached_reference`, as ``caustics compare``
-caches its references), a scored row with its page into the results cache, both
-atomically; a worker writes nothing. So a worker
+caches its references), a scored row with its data files and page
+(:func:`harness.compare.isolation.write_outputs`, as ``caustics compare`` writes
+them) into the results cache, both atomically; a worker writes nothing. So a worker
 killed mid-task loses nothing (Dask runs the task again elsewhere; a task whose
 worker dies three times is failed with ``KilledWorker``), and Ctrl-C leaves both
 caches with whole entries only.
@@ -36,7 +37,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from harness.compare.outputs import write_comparison
+from harness.compare.isolation import write_outputs
 from harness.sweep.cache import CachedRow, ResultsCache
 from harness.sweep.cluster import GPU, ClusterInfo, worker_versions
 from harness.sweep.plan import RowJob, SweepPlan, plan_sweep
@@ -45,7 +46,6 @@ from harness.sweep.seeds import merge_reference, trace_seed
 from harness.terminal import error_line
 from renderers.mitsuba.reference import CUT_WARNING, CutFluxWarning, cached_reference
 from renderers.results import RenderResult
-from reports.build import write_page
 from reports.records import SceneComparison
 from scenes import Scene
 
@@ -136,8 +136,7 @@ def _page_writer(comparison: SceneComparison) -> Callable[[Path], None]:
     def write(folder: Path) -> None:
         # The page's links to the shared style sheet are ../_static/: the folder is
         # copied into the output beside the sweep's index, which writes _static.
-        write_comparison(folder, comparison)
-        write_page(folder.parent, comparison, folder=folder.name)
+        write_outputs(folder.parent, folder.name, comparison)
     return write
 
 
