@@ -27,7 +27,13 @@ from typing import Any
 
 from harness.checks import GOLDEN_DIR, LOCKS_FILE, PHYSICAL
 from harness.checks.run import load_check_files
-from harness.compare.isolation import load_failure, run_scene, scene_failure, write_failure
+from harness.compare.isolation import (
+    load_failure,
+    run_scene,
+    scene_failure,
+    status_failure,
+    write_failure,
+)
 from harness.compare.pipeline import (
     CheckOptions,
     CompareOptions,
@@ -36,7 +42,6 @@ from harness.compare.pipeline import (
     known_studies,
     run_comparison,
 )
-from harness.compare.scoring import NoCausticError
 from harness.compare.staging import staged_output
 from harness.loading import load_scenes
 from harness.writable import usable_cache
@@ -408,7 +413,10 @@ def compare(scene: SceneLike | Sequence[SceneLike],
         A comparison that fails becomes a :class:`Failure` (with a page, when
         ``output`` is given) and the others go on, as on the command line. Without
         it the first failure stops the run: its page and the index are written
-        (with ``output``) and :class:`ComparisonError` is raised from the error.
+        (with ``output``) and :class:`ComparisonError` is raised (from the error,
+        when one was raised). A comparison whose reference puts no caustic light on
+        any receiver (status ``no caustic``) is such a failure; with ``output`` its
+        data files are written beside its page.
 
     Raises
     ------
@@ -496,13 +504,26 @@ def _unwritten(entries, methods, run, load, *, isolate: bool
                 yield scene
                 continue
             try:
-                yield Comparison(run(scene, method), scene)
+                comparison = run(scene, method)
             except Exception as error:  # with isolate, a failure is this scene's alone
                 if not isolate:
                     raise
-                found = error.comparison if isinstance(error, NoCausticError) else None
-                yield Failure(scene_failure(scene, method.name, error, stage="comparison",
-                                            comparison=found))
+                yield Failure(scene_failure(scene, method.name, error, stage="comparison"))
+                continue
+            yield _answer(comparison, scene, isolate=isolate)
+
+
+def _answer(comparison: SceneComparison, scene: Scene, *, isolate: bool
+            ) -> Comparison | Failure:
+    """The comparison, or the failure of one that finished without an answer (its
+    status: no caustic); without ``isolate`` that failure raises
+    :class:`ComparisonError`."""
+    failure = status_failure(comparison)
+    if failure is None:
+        return Comparison(comparison, scene)
+    if not isolate:
+        raise ComparisonError(Failure(failure))
+    return Failure(failure)
 
 
 def _written(out_dir: Path, entries, methods, run, load, *, self_contained: bool

@@ -41,7 +41,10 @@ __all__ = [
     "CHECK_KIND_MEANING",
     "CHECK_RELATIONS",
     "CLAIM_VERDICTS",
+    "COMPARED",
     "METRIC_FORMULAS",
+    "NO_CAUSTIC",
+    "STATUS_REASONS",
     "Check",
     "ClaimVerdict",
     "ConvergenceSection",
@@ -73,6 +76,20 @@ METRIC_FORMULAS: dict[str, str] = {
     "flux_ratio": "Σ luminance(method) / Σ luminance(ref) over the region (1 = energy kept)",
     "stray_flux": "Σ luminance(method) outside the scene's caustic region / Σ luminance(ref) "
                   "over the whole map (excess: minus the reference's own share there)",
+}
+
+
+#: A comparison's status: it answered the question (its metrics, studies and checks).
+COMPARED = "compared"
+#: A comparison's status: the reference puts no caustic light on any receiver, so the
+#: scene poses no question (every caustic metric NaN); the scores and the flux budget
+#: still say where the light went, and no study, check or cross-check ran.
+NO_CAUSTIC = "no caustic"
+#: Why a comparison with a status other than :data:`COMPARED` is not an answer (the
+#: one line its failure row and page show).
+STATUS_REASONS: dict[str, str] = {
+    NO_CAUSTIC: "no caustic: the reference puts no caustic light on any receiver (check "
+                "where the light, objects and receivers are)",
 }
 
 
@@ -732,6 +749,10 @@ class SceneComparison:
     speedup_withheld : SpeedupWithheld or None
         Set when the equal-error speedup is not meaningful: why, and the values
         computed (:attr:`speedup` and :attr:`speedup_cold` are then None).
+    status : str
+        :data:`COMPARED`, or why the comparison is not an answer
+        (:data:`STATUS_REASONS`: :data:`NO_CAUSTIC`); the callers make such a
+        comparison a failure row and page that keeps its data files.
     """
 
     name: str
@@ -753,11 +774,17 @@ class SceneComparison:
     crosscheck: Table | None = None
     headlines: tuple[Headline, ...] = ()
     speedup_withheld: SpeedupWithheld | None = None
+    status: str = COMPARED
 
     @property
     def page(self) -> str:
         """The page's name: scene and method (``glass_sphere-strong``)."""
         return f"{self.name}-{self.method}"
+
+    @property
+    def answered(self) -> bool:
+        """Whether the comparison answered (:attr:`status` is :data:`COMPARED`)."""
+        return self.status == COMPARED
 
     def metric(self, view: str, region: str, metric: str) -> MetricValue:
         """Look one metric up; KeyError if it was not computed."""

@@ -6,7 +6,9 @@ Whatever goes wrong inside one scene and method (a renderer error, a NaN that a
 later step cannot take, a bug) becomes a :class:`~reports.records.SceneFailure`:
 a failure row in the index, a page with the one-line error, ``failure.json``
 beside it; the run goes on with the next scene. An interrupt (Ctrl-C) is not a
-failure of the scene and ends the run.
+failure of the scene and ends the run. A comparison that finished without an answer
+(its status, e.g. ``no caustic``: :data:`reports.records.STATUS_REASONS`) keeps its
+data files and gets a failure row and page that say why (:func:`status_failure`).
 """
 
 from __future__ import annotations
@@ -16,15 +18,14 @@ from pathlib import Path
 from typing import Any
 
 from harness.compare.outputs import write_comparison, write_json
-from harness.compare.scoring import NoCausticError
 from harness.terminal import error_line
 from reports.build import write_page
 from reports.plots import write_pdfs
-from reports.records import SceneComparison, SceneFailure
+from reports.records import STATUS_REASONS, SceneComparison, SceneFailure
 from scenes import Scene, SceneError
 
-__all__ = ["FAILURE_JSON", "load_failure", "run_scene", "scene_failure", "write_data",
-           "write_failure", "write_outputs"]
+__all__ = ["FAILURE_JSON", "load_failure", "run_scene", "scene_failure", "status_failure",
+           "write_data", "write_failure", "write_outputs"]
 
 #: Written into a failed scene's folder: the failure record as strict JSON.
 FAILURE_JSON = "failure.json"
@@ -38,6 +39,18 @@ def scene_failure(scene: Scene, method: str, error: BaseException, *, stage: str
                         error=error_line(error), stage=stage,
                         description=scene.info.description,
                         flux_budget=comparison.flux_budget if comparison else None)
+
+
+def status_failure(comparison: SceneComparison) -> SceneFailure | None:
+    """The failure record of a comparison that finished without an answer (its
+    ``status``: why, as one line; its flux budget kept), or None when it answered."""
+    if comparison.answered:
+        return None
+    return SceneFailure(name=comparison.name, method=comparison.method,
+                        source=comparison.source,
+                        error=STATUS_REASONS.get(comparison.status, comparison.status),
+                        stage="comparison", description=comparison.description,
+                        flux_budget=comparison.flux_budget)
 
 
 def load_failure(source: str, method: str, error: SceneError) -> SceneFailure:
@@ -77,7 +90,9 @@ def run_scene(out_dir: Path, folder: str, scene: Scene, method: str,
               compare: Callable[[], SceneComparison], *, self_contained: bool = False,
               ) -> tuple[SceneComparison | SceneFailure, dict[str, Any]]:
     """Run ``compare`` and write its outputs into ``out_dir/folder`` (as
-    :func:`write_outputs`); on any exception, the failure's page and ``failure.json``.
+    :func:`write_outputs`); on any exception, or a comparison without an answer
+    (:func:`status_failure`: its data files are written), the failure's page and
+    ``failure.json``.
 
     Returns
     -------
@@ -86,22 +101,16 @@ def run_scene(out_dir: Path, folder: str, scene: Scene, method: str,
     row : dict
         The index row (:func:`reports.build.write_page`).
     """
-    stage, comparison, no_caustic = "comparison", None, None
+    stage, comparison = "comparison", None
     try:
-        try:
-            comparison = compare()
-        except NoCausticError as error:
-            # The scene poses no question, but its files still say where the light went.
-            comparison, no_caustic = error.comparison, error
+        comparison = compare()
         stage = "data files"
-        if comparison is not None:
-            write_data(out_dir / folder, comparison)
-        if no_caustic is not None:
-            stage = "comparison"
-            raise no_caustic
-        stage = "report page"
-        return comparison, write_page(out_dir, comparison, folder=folder,
-                                      self_contained=self_contained)
+        write_data(out_dir / folder, comparison)
+        failure = status_failure(comparison)
+        if failure is None:
+            stage = "report page"
+            return comparison, write_page(out_dir, comparison, folder=folder,
+                                          self_contained=self_contained)
     except Exception as error:  # any failure is this scene's, not the run's
         failure = scene_failure(scene, method, error, stage=stage, comparison=comparison)
     return failure, write_failure(out_dir, folder, failure, self_contained=self_contained)

@@ -12,7 +12,9 @@ The stages, in order (``docs/architecture.md``):
    one timing function (:func:`harness.compare.timed.timed_render`; a method with a
    GL runner in the runner's context, which its studies share);
 4. **score** — every metric per view and region, stability, flux budgets
-   (:func:`harness.compare.scoring.score_render`);
+   (:func:`harness.compare.scoring.score_render`); a reference with no caustic ends
+   the comparison here with the status ``no caustic``
+   (:data:`reports.records.NO_CAUSTIC`);
 5. **studies** — each registered study the options name that applies to the method
    adds a typed section (:mod:`harness.compare.studies`);
 6. **checks** — the accuracy checks of every kind (:mod:`harness.checks.run`);
@@ -35,14 +37,14 @@ from harness.checks.run import CheckFiles, comparison_checks, load_check_files
 from harness.checks.stability import convergence_outcomes
 from harness.compare.headlines import with_headlines
 from harness.compare.provenance import provenance
-from harness.compare.scoring import References, Scored, require_caustic, score_render
+from harness.compare.scoring import References, Scored, has_caustic, score_render
 from harness.compare.studies import Study, StudyContext, registered_studies
 from harness.compare.timed import TimedRender, gl_runner, timed_render
 from harness.crosscheck import run_crosscheck
 from harness.studies.timing import MIN_REPEATS
 from renderers.methods import Method
 from renderers.mitsuba.reference import render_reference
-from reports.records import SceneComparison, Section
+from reports.records import COMPARED, NO_CAUSTIC, SceneComparison, Section
 from scenes import SCENES_DIR, Scene, effects_of, with_settings
 from scenes.geometry import build_geometry
 
@@ -188,11 +190,12 @@ def run_comparison(scene: Scene, method: Method, *,
     sweep : dict, optional
         A sweep row's settings, recorded in the provenance.
 
-    Raises
-    ------
-    harness.compare.scoring.NoCausticError
-        The reference puts no caustic light on any receiver (the error carries the
-        scored comparison, without studies, checks or cross-check).
+    Returns
+    -------
+    SceneComparison
+        Its ``status``: :data:`~reports.records.COMPARED`, or
+        :data:`~reports.records.NO_CAUSTIC` when the reference puts no caustic light on
+        any receiver (scored, without studies, checks or cross-check).
     """
     scene = method.configure(scene)
     references = references or render_references(scene, options)
@@ -203,10 +206,11 @@ def run_comparison(scene: Scene, method: Method, *,
         geometry = runner.geometry if runner is not None else build_geometry(scene)
         render = render or timed_render(method, scene, repeats=options.repeats, runner=runner)
         scored = score_render(scene, geometry, render, references)
-        # A scene with no caustic poses no question: its scores and files say where the
-        # light went; no study, check or cross-check runs on it.
-        require_caustic(references.reference, comparison=_assemble(
-            scene, method, scored, render, references, sweep=sweep))
+        if not has_caustic(references.reference):
+            # A scene with no caustic poses no question: its scores and files say where
+            # the light went; no study, check or cross-check runs on it.
+            return _assemble(scene, method, scored, render, references, sweep=sweep,
+                             status=NO_CAUSTIC)
         sections = _studies(StudyContext(scene, method, geometry, render, references, scored,
                                          runner, options, {}), wanted)
     stability = dict(scored.stability)
@@ -234,7 +238,8 @@ def run_comparison(scene: Scene, method: Method, *,
 
 
 def _assemble(scene: Scene, method: Method, scored: Scored, render: TimedRender,
-              references: References, *, sweep: dict | None, stability: dict | None = None,
+              references: References, *, sweep: dict | None, status: str = COMPARED,
+              stability: dict | None = None,
               sections: tuple[Section, ...] = (), checks: tuple = (),
               checks_not_applied: dict | None = None, crosscheck=None,
               crosscheck_provenance: dict | None = None) -> SceneComparison:
@@ -249,4 +254,5 @@ def _assemble(scene: Scene, method: Method, scored: Scored, render: TimedRender,
                               checks_not_applied=checks_not_applied,
                               crosscheck=crosscheck_provenance, sweep=sweep),
         stability=scored.stability if stability is None else stability,
-        budgets=scored.budgets, sections=sections, checks=checks, crosscheck=crosscheck))
+        budgets=scored.budgets, sections=sections, checks=checks, crosscheck=crosscheck,
+        status=status))

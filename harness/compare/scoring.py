@@ -37,27 +37,10 @@ from reports.display import difference_range
 from reports.records import FluxBudgets, MetricValue
 from scenes import Scene, effects_of
 from scenes.colour import luminance
-from scenes.errors import HarnessError
 from scenes.geometry import SceneGeometry
 
-__all__ = ["NoCausticError", "References", "Scored", "camera_is_blind", "channel_correlation",
-           "relative_noise",
-           "require_caustic", "score_render", "views_of"]
-
-
-class NoCausticError(HarnessError):
-    """The reference puts no caustic light on any receiver: nothing to compare.
-
-    Attributes
-    ----------
-    comparison : SceneComparison or None
-        The finished comparison, every caustic metric NaN: its data files and flux
-        budget still show where the light went.
-    """
-
-    def __init__(self, message: str, *, comparison=None):
-        super().__init__(message)
-        self.comparison = comparison
+__all__ = ["References", "Scored", "camera_is_blind", "channel_correlation", "has_caustic",
+           "relative_noise", "score_render", "views_of"]
 
 
 class References(NamedTuple):
@@ -128,14 +111,11 @@ def channel_correlation(scene: Scene) -> float:
     return 0.0 if "dispersion" in effects_of(scene) else 1.0
 
 
-def require_caustic(reference: RenderResult, *, comparison=None) -> None:
-    """Raise :class:`NoCausticError` (carrying ``comparison``) when the reference's
-    receivers hold no caustic flux at all: every caustic metric is NaN, the scene
-    poses no question."""
-    if sum(float(np.sum(r.total_flux())) for r in reference.receivers) == 0.0:
-        raise NoCausticError("no caustic: the reference puts no caustic light on any "
-                             "receiver (check where the light, objects and receivers are)",
-                             comparison=comparison)
+def has_caustic(reference: RenderResult) -> bool:
+    """Whether the reference's receivers hold any caustic flux. Without any, every
+    caustic metric is NaN and the scene poses no question: the comparison's status
+    is :data:`reports.records.NO_CAUSTIC`."""
+    return sum(float(np.sum(r.total_flux())) for r in reference.receivers) != 0.0
 
 
 def camera_is_blind(reference: np.ndarray, method: np.ndarray) -> bool:

@@ -73,14 +73,9 @@ def score_row(scene: Scene, method_name: str, render: RowRender, reference: Rend
               independent: RenderResult, *, extra: dict | None = None) -> SceneComparison:
     """Compare ``render`` with ``reference`` (noise floor: ``independent``) through the
     comparison pipeline; ``extra`` is recorded as the provenance's ``sweep`` (with the
-    worker). A Dask task.
-
-    Raises
-    ------
-    harness.compare.scoring.NoCausticError
-        The reference puts no caustic light on any receiver: nothing to compare (as
-        in ``caustics compare``).
-    """
+    worker). A Dask task. A reference with no caustic light on any receiver gives a
+    comparison with the status ``no caustic`` (as in ``caustics compare``): the
+    client fails its row."""
     return run_comparison(scene, load_method(method_name), options=ROW_OPTIONS,
                           references=References(reference, independent), render=render.timed,
                           sweep={**(extra or {}), "worker": render.worker})

@@ -21,7 +21,8 @@ caches with whole entries only.
 
 A task that raises costs its row(s), never the sweep: the row records its stage
 (``reference``, ``render`` or ``score``) and the one-line error, and every other row
-goes on. Failed rows are not cached; a rerun tries them again.
+goes on; so does a row whose comparison has no answer (its status, ``no caustic``:
+stage ``score``). Failed rows are not cached; a rerun tries them again.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from harness.compare.isolation import write_outputs
+from harness.compare.isolation import status_failure, write_outputs
 from harness.sweep.cache import CachedRow, ResultsCache
 from harness.sweep.cluster import GPU, ClusterInfo, worker_versions
 from harness.sweep.plan import RowJob, SweepPlan, plan_sweep
@@ -292,6 +293,10 @@ class _Runner:
             return _failure(job, future, self.graph)
         comparison = future.result()
         render = self.graph.renders[job.key].result()
+        unanswered = status_failure(comparison)
+        if unanswered is not None:  # no caustic: nothing to compare (as in compare)
+            return RowResult(job=job, worker=render.worker, error=unanswered.error,
+                             stage="score")
         record = _row_record(job, comparison, render)
         try:
             if self.results is not None:

@@ -11,7 +11,7 @@ import json
 import pytest
 
 from harness import api
-from reports.records import Check, MetricValue
+from reports.records import NO_CAUSTIC, STATUS_REASONS, Check, MetricValue
 from scenes import SceneError
 from tests.conftest import SCENES
 from tests.reports.conftest import make_comparison
@@ -122,3 +122,29 @@ def test_comparison_reads_metrics_checks_and_writes_its_report(tmp_path, monkeyp
     assert c.physical_failures == (failing,)
     written = api.write_report(c, tmp_path / "report")
     assert written.get().page.is_file() and written.index.is_file()
+
+
+def _no_caustic(scene, method, **kwargs):
+    """A run_comparison whose reference held no caustic: it returns (never raises)
+    a comparison with that status."""
+    record = make_comparison(name=scene.name, checks=False, camera=(24, 32), receiver=(16, 16))
+    return dataclasses.replace(record, method=method.name, status=NO_CAUSTIC)
+
+
+def test_no_caustic_is_a_status_that_becomes_a_failure(tmp_path, monkeypatch):
+    """Regression lock: a comparison with the status ``no caustic`` is a Failure
+    (stage ``comparison``, the status's reason) with isolate, written or not, its
+    data files kept; without isolate it raises ComparisonError, after its page."""
+    monkeypatch.setattr(api, "run_comparison", _no_caustic)
+    (failure,) = api.compare("glass_sphere", ["paper"], isolate=True).failures
+    assert (failure.stage, failure.error) == ("comparison", STATUS_REASONS[NO_CAUSTIC])
+    out = tmp_path / "out"
+    written = api.compare("glass_sphere", ["paper"], output=out, isolate=True)
+    assert written.failures[0].page.is_file()
+    assert (out / "glass_sphere-paper" / "metrics.json").is_file()
+    with pytest.raises(api.ComparisonError, match="no caustic"):
+        api.compare("glass_sphere", ["paper"])
+    with pytest.raises(api.ComparisonError, match="no caustic") as caught:
+        api.compare("glass_sphere", ["paper"], output=tmp_path / "again")
+    assert caught.value.failure.page.is_file()
+

@@ -1,5 +1,6 @@
 """One scene's failure is its own: a failure record, page and ``failure.json``; the
-next scene is unaffected."""
+next scene is unaffected. A comparison without an answer (no caustic) is such a
+failure, its data files kept."""
 
 from __future__ import annotations
 
@@ -10,9 +11,9 @@ from types import SimpleNamespace
 import numpy as np
 
 from harness.compare import isolation
-from harness.compare.isolation import FAILURE_JSON, run_scene
+from harness.compare.isolation import FAILURE_JSON, run_scene, status_failure
 from reports.build import write_index
-from reports.records import FluxBudgets, SceneFailure, Table
+from reports.records import NO_CAUSTIC, STATUS_REASONS, FluxBudgets, SceneFailure, Table
 from tests.reports.conftest import make_comparison
 
 SCENE = SimpleNamespace(name="broken", source="/scenes/broken.toml",
@@ -70,3 +71,22 @@ def test_other_scenes_complete_and_the_index_lists_both(tmp_path):
     assert "relMSE is NaN" in index and 'href="good-paper/index.html"' in index
     assert np.isfinite(json.loads((tmp_path / "good-paper" / "metrics.json").read_text())
                        ["metrics"][0]["value"])
+
+
+def test_a_comparison_without_a_caustic_keeps_its_files_and_fails_its_row(tmp_path):
+    """Regression lock: a comparison whose status is ``no caustic`` (no exception)
+    writes its data files (where the light went) and gets a failure page and
+    ``failure.json`` with that reason and its flux budget."""
+    budget = Table(("item", "flux_w", "fraction"), (("traced", 1.0, 1.0),))
+    dark = replace(make_comparison(name="dark", checks=False, camera=(24, 32),
+                                   receiver=(16, 16)),
+                   budgets=FluxBudgets(summary=budget), status=NO_CAUSTIC)
+    assert not dark.answered and status_failure(make_comparison(name="lit")) is None
+    item, row = run_scene(tmp_path, "dark-paper", SCENE, "paper", lambda: dark)
+    assert isinstance(item, SceneFailure) and row["failure"]
+    assert (item.stage, item.error) == ("comparison", STATUS_REASONS[NO_CAUSTIC])
+    assert item.flux_budget is budget and item.method == dark.method
+    assert (tmp_path / "dark-paper" / "metrics.json").is_file()
+    record = json.loads((tmp_path / "dark-paper" / FAILURE_JSON).read_text())
+    assert record["failed"]["error"].startswith("no caustic: the reference puts no caustic")
+    assert "no caustic" in (tmp_path / "dark-paper" / "index.html").read_text()

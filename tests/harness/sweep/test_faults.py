@@ -1,6 +1,7 @@
-"""A task that raises costs its row, never the sweep: the row records its scene,
-setting, stage and error in results.csv and the index, every other row completes,
-and the failed rows are not cached (a rerun tries them again)."""
+"""A task that raises, or a comparison with no answer (no caustic), costs its row,
+never the sweep: the row records its scene, setting, stage and error in results.csv
+and the index, every other row completes, and the failed rows are not cached (a
+rerun tries them again)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import harness.sweep.run as run_module
 from harness.cli import main
 from harness.sweep.cache import ResultsCache, results_dir
 from harness.sweep.rows import render_row
+from reports.records import NO_CAUSTIC, STATUS_REASONS
 
 from .conftest import read_rows, small_scene, sweep_text
 
@@ -28,8 +30,9 @@ def failing_render(scene, method_name, *, repeats):
 def test_failing_rows_are_recorded_and_the_sweep_goes_on(tmp_path, monkeypatch, capsys):
     """Regression lock (fault handling), on a real in-process Dask cluster: of three
     scenes, ``broken``'s render task raises (injected) and ``nocaustic``'s receiver
-    lies beside the caustic, so its score task raises NoCausticError (the check of
-    `caustics compare`); the glass sphere completes. results.csv and the index name
+    lies beside the caustic, so its comparison finishes with the status ``no caustic``
+    (as in `caustics compare`) and its row fails at the score; the glass sphere
+    completes. results.csv and the index name
     each failure's scene, setting, stage and one-line error; exit status 1; stderr
     one line per failed row; only the good row is in the results cache."""
     folder = tmp_path / "sweep"
@@ -54,7 +57,7 @@ def test_failing_rows_are_recorded_and_the_sweep_goes_on(tmp_path, monkeypatch, 
     assert (broken["iterations"], broken["stage"], broken["error"]) == (
         "3", "render", "RuntimeError: injected render failure")
     assert broken["relmse"] == broken["worker"] == broken["page"] == ""
-    assert (dark["stage"], dark["error"].split(":")[0]) == ("score", "NoCausticError")
+    assert (dark["stage"], dark["error"]) == ("score", STATUS_REASONS[NO_CAUSTIC])
     assert dark["worker"].startswith("inproc://") and dark["relmse"] == ""
     index = (out / "index.html").read_text()
     assert "2 of 3 rows failed" in index and "injected render failure" in index
