@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -43,7 +43,7 @@ from harness.compare.pipeline import (
     run_comparison,
 )
 from harness.compare.staging import staged_output
-from harness.loading import load_scenes
+from harness.loading import load_scenes as _load_files
 from harness.writable import usable_cache
 from renderers.methods import Method, load_method
 from renderers.mitsuba.cache import cache_dir as default_cache_dir
@@ -51,12 +51,12 @@ from renderers.mitsuba.reference import render_reference as _render_reference
 from renderers.results import RenderResult
 from reports.build import scene_folder, write_index
 from reports.records import Check, Headline, MetricValue, SceneComparison, SceneFailure
-from scenes import Scene, SceneError, bundled_scene_names, with_settings
+from scenes import Problem, Scene, SceneError, bundled_scene_names, with_settings
 from scenes.errors import HarnessError
 
 __all__ = ["DEFAULT_METHODS", "Comparison", "ComparisonError", "ComparisonSet", "Failure",
-           "OptionError", "bundled_scenes", "compare", "load_scene", "render_reference",
-           "write_report"]
+           "OptionError", "UnloadedScene", "bundled_scenes", "compare", "load_scene",
+           "load_scenes", "render_reference", "write_report"]
 
 #: Methods compared when none is named: both caustics-mapping presets.
 DEFAULT_METHODS = ("paper", "strong")
@@ -67,6 +67,24 @@ SceneLike = str | os.PathLike | Scene
 #: What names a method: its registered name or an object with the
 #: :class:`renderers.methods.Method` protocol.
 MethodLike = str | Method
+
+
+@dataclass(frozen=True)
+class UnloadedScene:
+    """A scene that did not load or validate (:func:`load_scenes`): :func:`compare`
+    with ``isolate`` gives it a failure row and page per method, without loading it
+    again.
+
+    Attributes
+    ----------
+    source : str
+        The file path or bundled name it was given as.
+    error : scenes.SceneError
+        Its problems, each naming the file and field.
+    """
+
+    source: str
+    error: SceneError
 
 
 class OptionError(HarnessError, ValueError):
@@ -270,7 +288,8 @@ def bundled_scenes(*, hard: bool = True) -> tuple[str, ...]:
 
 
 def load_scene(scene: SceneLike, *, settings: Mapping[str, Any] | None = None,
-               resolution: tuple[int, int] | None = None) -> Scene:
+               resolution: tuple[int, int] | None = None,
+               on_warning: Callable[[Problem], None] | None = None) -> Scene:
     """A scene, fully validated (meshes read, geometry built), as every command loads it.
 
     Parameters
@@ -284,6 +303,8 @@ def load_scene(scene: SceneLike, *, settings: Mapping[str, Any] | None = None,
     resolution
         The camera image's width and height in pixels (a smaller image makes a quick
         test; the reference cache key changes with it).
+    on_warning
+        Called with each warning of a file (a legal but suspect scene).
 
     Raises
     ------
@@ -294,7 +315,7 @@ def load_scene(scene: SceneLike, *, settings: Mapping[str, Any] | None = None,
     if isinstance(scene, Scene):
         loaded = scene
     else:
-        (loaded,) = load_scenes([os.fspath(scene)])
+        (loaded,) = _load_files([os.fspath(scene)], on_warning=on_warning)
     loaded = with_settings(loaded, dict(settings or {}))
     if resolution is not None:
         width, height = (int(v) for v in resolution)
@@ -303,6 +324,30 @@ def load_scene(scene: SceneLike, *, settings: Mapping[str, Any] | None = None,
                               f"(got {resolution!r})"])
         loaded = dataclasses.replace(
             loaded, camera=dataclasses.replace(loaded.camera, resolution=(width, height)))
+    return loaded
+
+
+def load_scenes(scenes: SceneLike | Sequence[SceneLike], *,
+                settings: Mapping[str, Any] | None = None,
+                resolution: tuple[int, int] | None = None,
+                on_warning: Callable[[Problem], None] | None = None
+                ) -> list[Scene | UnloadedScene]:
+    """Each scene loaded once (:func:`load_scene`), in order; one that does not load
+    is an :class:`UnloadedScene` holding its error, and the others still load. The
+    list is what :func:`compare` takes (``caustics compare`` loads its scenes here
+    and prints the problems before anything renders); an :class:`UnloadedScene`
+    given is kept as it is."""
+    loaded: list[Scene | UnloadedScene] = []
+    for entry in _entries(scenes):
+        if isinstance(entry, UnloadedScene):
+            loaded.append(entry)
+            continue
+        try:
+            loaded.append(load_scene(entry, settings=settings, resolution=resolution,
+                                     on_warning=on_warning))
+        except SceneError as error:
+            source = entry.source if isinstance(entry, Scene) else os.fspath(entry)
+            loaded.append(UnloadedScene(source, error))
     return loaded
 
 
@@ -349,8 +394,8 @@ def _methods(methods: MethodLike | Iterable[MethodLike]) -> list[Method]:
     return list(found.values())
 
 
-def _entries(scene: SceneLike | Sequence[SceneLike]) -> list[SceneLike]:
-    if isinstance(scene, str | os.PathLike | Scene):
+def _entries(scene) -> list:
+    if isinstance(scene, str | os.PathLike | Scene | UnloadedScene):
         return [scene]
     return list(scene)
 
@@ -359,7 +404,7 @@ def _page(output: Path, folder: str) -> Path:
     return output / folder / "index.html"
 
 
-def compare(scene: SceneLike | Sequence[SceneLike],
+def compare(scene: SceneLike | UnloadedScene | Sequence[SceneLike | UnloadedScene],
             methods: MethodLike | Iterable[MethodLike] = DEFAULT_METHODS, *,
             studies: Sequence[str] | None = None, quick: bool = False,
             settings: Mapping[str, Any] | None = None,
@@ -378,7 +423,8 @@ def compare(scene: SceneLike | Sequence[SceneLike],
     ----------
     scene
         One scene or several: file paths, bundled names or :class:`scenes.Scene`
-        objects (:func:`load_scene`).
+        objects (:func:`load_scene`), or what :func:`load_scenes` returned. Each is
+        loaded once, before anything renders.
     methods
         Registered names (``paper``, ``strong``, a third-party method) or
         :class:`renderers.methods.Method` objects; each name once.
@@ -435,8 +481,8 @@ def compare(scene: SceneLike | Sequence[SceneLike],
         raise OptionError(f"unknown study {', '.join(unknown)} "
                           f"(choose from {', '.join(known_studies())})")
     if frames is not None and "temporal" not in selected:
-        raise OptionError("frames sets the temporal study's frames: add temporal to the "
-                          "studies")
+        raise OptionError("frames (--frames) sets the temporal study's frames: add temporal "
+                          "to the studies (--studies temporal)")
     chosen = _methods(methods)
     # Every checks file is read before anything renders: a missing one is an error.
     check_options = CheckOptions(
@@ -455,20 +501,16 @@ def compare(scene: SceneLike | Sequence[SceneLike],
         return run_comparison(scene, method, options=options, checks=check_options,
                               crosscheck=crosscheck)
 
-    def load(entry: SceneLike, method: Method, *, isolate: bool) -> Scene | Failure:
-        return _load(entry, method, settings, resolution, isolate=isolate)
-
-    entries = _entries(scene)
-    if not isolate:  # every scene is loaded before anything renders
-        entries = [load_scene(e, settings=settings, resolution=resolution) for e in entries]
+    # Every scene is loaded once, before anything renders.
+    entries = _loaded(scene, settings, resolution, isolate=isolate)
     if output is None:
-        return ComparisonSet(tuple(_unwritten(entries, chosen, run, load, isolate=isolate)))
+        return ComparisonSet(tuple(_unwritten(entries, chosen, run, isolate=isolate)))
     final = Path(output).resolve()
     items: list[Comparison | Failure] = []
     stopped, cause = None, None
     with staged_output(final) as out_dir:
         rows = []
-        for item, row, folder, error in _written(out_dir, entries, chosen, run, load,
+        for item, row, folder, error in _written(out_dir, entries, chosen, run,
                                                  self_contained=self_contained):
             rows.append(row)
             items.append(dataclasses.replace(item, page=_page(final, folder)))
@@ -481,40 +523,22 @@ def compare(scene: SceneLike | Sequence[SceneLike],
     return ComparisonSet(tuple(items), final / "index.html")
 
 
-def _load(entry: SceneLike, method: Method, settings, resolution, *, isolate: bool
-          ) -> Scene | Failure:
-    """The scene of ``entry``; with ``isolate``, a scene that does not load is a
-    :class:`Failure` of ``method`` (named by the file's stem)."""
-    try:
-        return load_scene(entry, settings=settings, resolution=resolution)
-    except SceneError as error:
-        if not isolate:
-            raise
-        source = entry.source if isinstance(entry, Scene) else os.fspath(entry)
-        return Failure(load_failure(source, method.name, error))
-
-
-def _unwritten(entries, methods, run, load, *, isolate: bool
-               ) -> Iterator[Comparison | Failure]:
-    """Each scene and method compared, nothing written."""
-    for entry in entries:
-        for method in methods:
-            scene = load(entry, method, isolate=isolate)
-            if isinstance(scene, Failure):
-                yield scene
-                continue
-            try:
-                comparison = run(scene, method)
-            except Exception as error:  # with isolate, a failure is this scene's alone
-                if not isolate:
-                    raise
-                yield Failure(scene_failure(scene, method.name, error, stage="comparison"))
-                continue
-            yield _answer(comparison, scene, isolate=isolate)
+def _loaded(scene, settings, resolution, *, isolate: bool) -> list[Scene | UnloadedScene]:
+    """Each entry loaded once: a :class:`~scenes.Scene` (with the overrides applied,
+    when there are any), or, with ``isolate``, an :class:`UnloadedScene`; without it
+    the first scene that does not load raises."""
+    if isolate:
+        return load_scenes(scene, settings=settings, resolution=resolution)
+    loaded: list[Scene | UnloadedScene] = []
+    for entry in _entries(scene):
+        if isinstance(entry, UnloadedScene):
+            raise entry.error
+        loaded.append(load_scene(entry, settings=settings, resolution=resolution))
+    return loaded
 
 
 def _answer(comparison: SceneComparison, scene: Scene, *, isolate: bool
-            ) -> Comparison | Failure:
+                ) -> Comparison | Failure:
     """The comparison, or the failure of one that finished without an answer (its
     status: no caustic); without ``isolate`` that failure raises
     :class:`ComparisonError`."""
@@ -526,7 +550,24 @@ def _answer(comparison: SceneComparison, scene: Scene, *, isolate: bool
     return Failure(failure)
 
 
-def _written(out_dir: Path, entries, methods, run, load, *, self_contained: bool
+def _unwritten(entries, methods, run, *, isolate: bool) -> Iterator[Comparison | Failure]:
+    """Each scene and method compared, nothing written."""
+    for entry in entries:
+        for method in methods:
+            if isinstance(entry, UnloadedScene):
+                yield Failure(load_failure(entry.source, method.name, entry.error))
+                continue
+            try:
+                comparison = run(entry, method)
+            except Exception as error:  # with isolate, a failure is this scene's alone
+                if not isolate:
+                    raise
+                yield Failure(scene_failure(entry, method.name, error, stage="comparison"))
+                continue
+            yield _answer(comparison, entry, isolate=isolate)
+
+
+def _written(out_dir: Path, entries, methods, run, *, self_contained: bool
              ) -> Iterator[tuple[Comparison | Failure, dict, str, BaseException | None]]:
     """Each scene and method compared and written into ``out_dir`` (its data files,
     PDFs and page: :func:`harness.compare.isolation.run_scene`), as ``(item, index
@@ -534,29 +575,29 @@ def _written(out_dir: Path, entries, methods, run, load, *, self_contained: bool
     taken: list[str] = []
     for entry in entries:
         for method in methods:
-            scene = load(entry, method, isolate=True)
-            if isinstance(scene, Failure):
-                folder = scene_folder(scene.record.page, taken=taken)
-                row = write_failure(out_dir, folder, scene.record,
+            if isinstance(entry, UnloadedScene):
+                failure = Failure(load_failure(entry.source, method.name, entry.error))
+                folder = scene_folder(failure.record.page, taken=taken)
+                row = write_failure(out_dir, folder, failure.record,
                                     self_contained=self_contained)
                 taken.append(folder)
-                yield scene, row, folder, None
+                yield failure, row, folder, None
                 continue
             caught: list[BaseException] = []
 
-            def compared(scene=scene, method=method, caught=caught) -> SceneComparison:
+            def compared(scene=entry, method=method, caught=caught) -> SceneComparison:
                 try:
                     return run(scene, method)
                 except Exception as error:
                     caught.append(error)
                     raise
 
-            folder = scene_folder(f"{scene.name}-{method.name}", taken=taken)
-            record, row = run_scene(out_dir, folder, scene, method.name, compared,
+            folder = scene_folder(f"{entry.name}-{method.name}", taken=taken)
+            record, row = run_scene(out_dir, folder, entry, method.name, compared,
                                     self_contained=self_contained)
             taken.append(folder)
             item = (Failure(record) if isinstance(record, SceneFailure)
-                    else Comparison(record, scene))
+                    else Comparison(record, entry))
             yield item, row, folder, caught[0] if caught else None
 
 

@@ -16,16 +16,15 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
-from harness.api import DEFAULT_METHODS, OptionError
+from harness.api import DEFAULT_METHODS, OptionError, UnloadedScene, load_scenes
 from harness.api import compare as compare_scenes
 from harness.checks import KINDS
 from harness.checks.run import count_by_kind
-from harness.commands.scene import load_scenes
+from harness.commands.scene import print_warning
 from harness.compare.consistency import disagreements as output_disagreements
-from harness.compare.pipeline import default_studies, known_studies
 from harness.terminal import markup, plain
 from reports.records import SceneFailure, slower
-from scenes import Scene, SceneError, default_scene_path, parse_override, with_settings
+from scenes import Scene, SceneError, default_scene_path, parse_override
 
 __all__ = ["DEFAULT_METHODS", "check_count_lines", "compare", "excess_cell", "headline_lines",
            "print_summary", "summary_rows"]
@@ -142,18 +141,14 @@ def print_summary(comparisons, out_dir: Path, seconds: float) -> None:
             print(f"error: {plain(c.page)} failed ({c.stage}): {c.error}", file=sys.stderr)
 
 
-def _load(paths: list[str], overrides: dict) -> list[tuple[str, Scene | SceneError]]:
-    """Each scene with its overrides, or the SceneError it raised (its problems are
-    printed now, one line each, before anything renders). Raises the SceneError when
-    no scene at all is valid: there is then no run to save."""
-    loaded = []
-    for path in paths or [str(default_scene_path())]:
-        try:
-            scene = load_scenes([path])[0]
-            loaded.append((path, with_settings(scene, overrides)))
-        except SceneError as error:
-            loaded.append((path, error))
-    errors = [scene for _, scene in loaded if isinstance(scene, SceneError)]
+def _load(paths: list[str], overrides: dict) -> list[Scene | UnloadedScene]:
+    """Each scene loaded once with its overrides (:func:`harness.api.load_scenes`; its
+    warnings printed), or the :class:`~harness.api.UnloadedScene` holding its error
+    (its problems are printed now, one line each, before anything renders). Raises
+    the SceneError when no scene at all is valid: there is then no run to save."""
+    loaded = load_scenes(paths or [str(default_scene_path())], settings=overrides,
+                         on_warning=print_warning)
+    errors = [entry.error for entry in loaded if isinstance(entry, UnloadedScene)]
     if len(errors) == len(loaded):
         raise SceneError([p for error in errors for p in error.problems])
     for error in errors:
@@ -169,7 +164,8 @@ def compare(args: argparse.Namespace) -> int:
     Returns 0; 1 when a scene failed (its row and page say why), a checks file is
     missing, or two written copies of one number disagree
     (:mod:`harness.compare.consistency`); 3 when an accuracy check failed (not a known gap) and
-    ``--fail-on-checks`` asks for it; 2 for an unknown study.
+    ``--fail-on-checks`` asks for it; 2 for an unknown study, or ``--frames`` without
+    the temporal study (:class:`harness.api.OptionError`, before anything renders).
     """
     start = time.perf_counter()
     overrides = dict(parse_override(item) for item in args.set or [])
@@ -177,22 +173,12 @@ def compare(args: argparse.Namespace) -> int:
         if getattr(args, name) is not None:
             overrides[name] = getattr(args, name)
     scenes = _load(args.scenes, overrides)
-    studies = (tuple(s for s in args.studies.split(",") if s) if args.studies
-               else default_studies())
-    unknown = sorted(set(studies) - set(known_studies()))
-    if unknown:
-        print(f"error: unknown study {', '.join(unknown)} "
-              f"(choose from {', '.join(known_studies())})", file=sys.stderr)
-        return 2
-    if getattr(args, "frames", None) is not None and "temporal" not in studies:
-        print("error: --frames sets the temporal study's frames: add temporal to --studies "
-              "(e.g. --studies temporal)", file=sys.stderr)
-        return 2
+    studies = tuple(s for s in args.studies.split(",") if s) if args.studies else None
     names = [*(args.preset or []), *(args.method or [])] or list(DEFAULT_METHODS)
     try:
+        # The scenes carry their overrides already: the API does not load them again.
         result = compare_scenes(
-            [scene if isinstance(scene, Scene) else source for source, scene in scenes],
-            names, studies=studies, quick=args.quick, settings=overrides,
+            scenes, names, studies=studies, quick=args.quick,
             cache_dir=args.cache_dir, use_cache=not args.no_cache, locks=args.locks,
             golden_dir=args.golden, max_iterations=args.max_iterations,
             frames=getattr(args, "frames", None),

@@ -11,6 +11,7 @@ import json
 import pytest
 
 from harness import api
+from harness.cli import main
 from reports.records import NO_CAUSTIC, STATUS_REASONS, Check, MetricValue
 from scenes import SceneError
 from tests.conftest import SCENES
@@ -148,3 +149,31 @@ def test_no_caustic_is_a_status_that_becomes_a_failure(tmp_path, monkeypatch):
         api.compare("glass_sphere", ["paper"], output=tmp_path / "again")
     assert caught.value.failure.page.is_file()
 
+
+def test_the_command_line_loads_each_scene_once(tmp_path, monkeypatch):
+    """Regression lock: ``caustics compare`` loads each scene file once and applies
+    its overrides once, however many methods compare it; a scene that does not load
+    is a failure row of each method without a second load."""
+    loads, applied = [], []
+    real_load, real_settings = api._load_files, api.with_settings
+
+    def load(paths, **kwargs):
+        loads.append(list(paths))
+        return real_load(paths, **kwargs)
+
+    def settings(scene, overrides, **kwargs):
+        if overrides:
+            applied.append(scene.name)
+        return real_settings(scene, overrides, **kwargs)
+
+    monkeypatch.setattr(api, "_load_files", load)
+    monkeypatch.setattr(api, "with_settings", settings)
+    monkeypatch.setattr(api, "run_comparison", _fake())
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[scene]\nname = 'bad'\n")
+    out = tmp_path / "out"
+    assert main(["compare", "glass_sphere", str(bad), "-o", str(out), "-q", "--set",
+                 "grid=32", "--studies", "metrics", "--cache-dir", str(tmp_path)]) == 1
+    assert loads == [["glass_sphere"], [str(bad)]] and applied == ["glass_sphere"]
+    assert sorted(p.parent.name for p in out.glob("*/index.html")) == [
+        "bad-paper", "bad-strong", "glass_sphere-paper", "glass_sphere-strong"]

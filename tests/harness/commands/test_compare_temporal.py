@@ -109,7 +109,7 @@ def test_frames_needs_the_temporal_study(tmp_path, capsys):
     """``--frames`` without the temporal study is a usage error (exit 2, one line),
     before anything renders; so is a sequence of fewer than two frames."""
     assert main(["compare", "water_pool", "-o", str(tmp_path / "out"), "--frames", "6"]) == 2
-    assert "--frames sets the temporal study's frames" in capsys.readouterr().err
+    assert "(--frames) sets the temporal study's frames" in capsys.readouterr().err
     with pytest.raises(SystemExit) as info:
         main(["compare", "water_pool", "-o", str(tmp_path / "out"), "--studies", "temporal",
               "--frames", "1"])
