@@ -1,16 +1,16 @@
 """Does a scene form a caustic at all? A small photon probe that lets ``validate``
 predict ``compare``.
 
-``compare`` fails a scene whose reference puts no caustic light on any receiver
-(:class:`~harness.compare.isolation.NoCausticError`): every caustic metric would be
-0/0. It finds out only after the full reference render. The geometric checks in
-:mod:`scenes.geometry.checks` catch the plain cases (no specular object, an object
-outside a spot light's cone) but not a caustic that forms and then misses every
-receiver, since where it lands depends on the refraction. So ``validate`` traces a
-few photons with the reference's own tracer (:class:`~renderers.mitsuba.photons.
-PhotonTracer` in ``caustic_only`` mode: every photon is aimed at a specular
-object's bounding sphere, and only the counted specular chains deposit) and reads
-the caustic flux off its maps.
+``compare`` fails a scene whose reference puts no caustic light on any receiver (its
+comparison's status is ``no caustic``, :data:`reports.records.NO_CAUSTIC`): every
+caustic metric would be 0/0. It finds out only after the full reference render. The
+geometric checks in :mod:`scenes.geometry.checks` catch the plain cases (no specular
+object, an object outside a spot light's cone) but not a caustic that forms and then
+misses every receiver, since where it lands depends on the refraction. So
+``validate`` traces a few photons with the reference's own tracer
+(:class:`~renderers.mitsuba.photons.PhotonTracer` in ``caustic_only`` mode: every
+photon is aimed at a specular object's bounding sphere, and only the counted
+specular chains deposit) and reads the caustic flux off its maps.
 
 The probe's caustic flux is an unbiased estimate of the reference's, with the same
 tracer, chains and receivers (only the map resolution differs, and flux does not
