@@ -103,8 +103,6 @@ class DreiMethod:
     description: str = ("drei's Caustics (@pmndrs/vanilla) in headless Chromium: one "
                         "refraction, the beam's area ratio drawn where the light meets "
                         "the ground")
-    #: The caustics-mapping studies (convergence, cost) do not apply.
-    studies: bool = False
 
     def configure(self, scene: Scene) -> Scene:
         """``scene`` unchanged: the component's texture side is the scene's

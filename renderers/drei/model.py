@@ -273,7 +273,6 @@ class DreiModel:
     quantised_normals: bool = True
     world_radius: float = DEFAULT_WORLD_RADIUS
     description: str = "NumPy model of drei's caustic pass on analytic spheres"
-    studies: bool = False
 
     def configure(self, scene: Scene) -> Scene:
         """``scene`` unchanged; refused unless drei can represent it and every object

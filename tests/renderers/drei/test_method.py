@@ -11,7 +11,7 @@ import pytest
 
 from renderers.drei.method import DREI
 from renderers.drei.params import DreiSceneError
-from renderers.methods import GROUP, Method
+from renderers.methods import GROUP, Method, has_gl_runner
 from tests.conftest import REPO
 from tests.renderers.drei.scenes import sun_scene
 
@@ -21,8 +21,8 @@ def test_the_entry_point_names_a_method():
     target = project["entry-points"][GROUP]["drei-caustics"]
     module, _, attribute = target.partition(":")
     method = getattr(importlib.import_module(module), attribute)
-    assert isinstance(method, Method)
-    assert (method.name, method.studies) == ("drei-caustics", False)
+    assert isinstance(method, Method) and not has_gl_runner(method)
+    assert method.name == "drei-caustics"
 
 
 def test_configure_refuses_a_point_light_in_one_line(tmp_path):
