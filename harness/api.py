@@ -27,6 +27,7 @@ from typing import Any
 
 from harness.checks import GOLDEN_DIR, LOCKS_FILE, PHYSICAL
 from harness.checks.run import load_check_files
+from harness.compare.external import ExternalRender, read_timing
 from harness.compare.isolation import (
     load_failure,
     run_scene,
@@ -56,7 +57,7 @@ from scenes.errors import HarnessError
 
 __all__ = ["DEFAULT_METHODS", "Comparison", "ComparisonError", "ComparisonSet", "Failure",
            "OptionError", "UnloadedScene", "bundled_scenes", "compare", "load_scene",
-           "load_scenes", "render_reference", "write_report"]
+           "load_scenes", "render_reference", "score", "write_report"]
 
 #: Methods compared when none is named: both caustics-mapping presets.
 DEFAULT_METHODS = ("paper", "strong")
@@ -599,6 +600,60 @@ def _written(out_dir: Path, entries, methods, run, *, self_contained: bool
             item = (Failure(record) if isinstance(record, SceneFailure)
                     else Comparison(record, entry))
             yield item, row, folder, caught[0] if caught else None
+
+
+def score(scene: SceneLike, *, camera: str | os.PathLike | None = None,
+          receivers: Mapping[int, str | os.PathLike] | None = None,
+          timing: str | os.PathLike | Mapping[str, Any] | None = None,
+          settings: Mapping[str, Any] | None = None,
+          resolution: tuple[int, int] | None = None,
+          cache_dir: str | os.PathLike | None = None, use_cache: bool = True,
+          checks: bool = True, output: str | os.PathLike | None = None,
+          self_contained: bool = False, progress: bool = False,
+          on_warning: Callable[[Problem], None] | None = None) -> Comparison:
+    """Score images rendered outside the harness against the reference, with the
+    pipeline of :func:`compare` (``caustics score``;
+    ``docs/scoring-external-renders.md``).
+
+    Parameters
+    ----------
+    scene
+        The scene the images show, with the ``settings`` and ``resolution`` they were
+        rendered at (:func:`load_scene`): its camera resolution and ``receiver_map``
+        are the sizes the files must have.
+    camera
+        EXR of the camera image, radiance in W m^-2 sr^-1 (None: not scored).
+    receivers
+        Receiver index to EXR of its irradiance map in W/m² over (u, v); every
+        receiver of the scene, or none (not scored).
+    timing
+        The renderer's own timing report (a JSON file or its dict, ``frame_ms`` in
+        ms): shown as reported, not measured by the harness.
+    cache_dir, use_cache, checks, output, self_contained, progress
+        As for :func:`compare`; the studies are ``metrics`` alone.
+    on_warning
+        Called with each warning of the scene (:func:`load_scene`).
+
+    Raises
+    ------
+    harness.compare.external.ExternalRenderError
+        No view given, or a file missing or unusable (the message names it), before
+        any reference is rendered or anything written.
+    ComparisonError
+        The comparison failed.
+    """
+    if timing is not None and not isinstance(timing, Mapping):
+        timing = read_timing(timing)
+    method = ExternalRender(
+        camera=None if camera is None else Path(camera),
+        receivers={int(i): Path(p) for i, p in (receivers or {}).items()},
+        timing=None if timing is None else dict(timing))
+    loaded = load_scene(scene, settings=settings, resolution=resolution,
+                        on_warning=on_warning)
+    method.render(loaded)           # every file checked before anything renders or is written
+    return compare(loaded, method, studies=("metrics",), cache_dir=cache_dir,
+                   use_cache=use_cache, checks=checks, output=output,
+                   self_contained=self_contained, progress=progress).get(method.name)
 
 
 def write_report(comparisons: Comparison | Iterable[Comparison], output: str | os.PathLike,

@@ -198,6 +198,34 @@ def _compare_command(subparsers) -> None:
     _cache_options(p)
 
 
+def _receiver_file(text: str):
+    """``--receiver N=FILE.exr`` (parsed by the command's module, imported only now)."""
+    from harness.commands.score import parse_receiver
+    return parse_receiver(text)
+
+
+def _score_command(subparsers) -> None:
+    p = _command(subparsers, "score", "harness.commands.score:score",
+                 "score images rendered by any renderer (EXR) against the reference: "
+                 "metrics with intervals, checks, report (docs/scoring-external-renders.md)",
+                 output_dir=True)
+    p.add_argument("scene", nargs="?", metavar="SCENE", help=_SCENES_HELP)
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--camera", metavar="FILE.exr",
+                   help="camera image: linear radiance in W m^-2 sr^-1, RGB, the scene "
+                   "camera's resolution (default: the camera is not scored)")
+    p.add_argument("--receiver", action="append", type=_receiver_file, metavar="N=FILE.exr",
+                   help="receiver N's caustic irradiance map in W/m^2 over its (u, v), RGB, "
+                   "receiver_map texels, row 0 at vmin (repeatable; every receiver or none)")
+    p.add_argument("--timing", metavar="FILE.json",
+                   help="the renderer's own timing report, e.g. {\"frame_ms\": 12.3, "
+                   "\"device\": \"...\"}: shown as reported, not measured by the harness "
+                   "(default: render.json beside the first image, when there is one)")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="override any setting, as the images were rendered (repeatable)")
+    _cache_options(p)
+
+
 def _positive_metres(text: str) -> float:
     """``--tolerance``: a positive, finite number of metres."""
     try:
@@ -332,7 +360,7 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for group in (_setup_command, _scene_commands, _render_commands, _compare_command,
                   _figures_command, _crosscheck_command, _check_commands, _sweep_command,
-                  _export_command, _import_command):
+                  _export_command, _import_command, _score_command):
         group(subparsers)
     return parser
 

@@ -29,8 +29,8 @@ from renderers.results import RenderResult
 from scenes import Scene
 from scenes.errors import HarnessError
 
-__all__ = ["GROUP", "GLMethod", "Method", "MethodError", "available_methods", "has_gl_runner",
-           "load_method"]
+__all__ = ["GROUP", "ExternalMethod", "GLMethod", "Method", "MethodError", "available_methods",
+           "has_gl_runner", "load_method", "renders_elsewhere"]
 
 #: The entry-point group methods register in.
 GROUP = "caustics_harness.methods"
@@ -82,6 +82,25 @@ class GLMethod(Method, Protocol):
         :class:`scenes.geometry.SceneGeometry` of the scenes it is given; None: built
         per render)."""
         ...
+
+
+@runtime_checkable
+class ExternalMethod(Method, Protocol):
+    """The capability of a method whose images were rendered outside the harness
+    (read from files): the harness cannot time it. Its :meth:`~Method.render` is
+    called once and never timed; the time its renderer reported, if any, is carried
+    as reported (:meth:`reported_timing`), labelled as not measured by the harness.
+    """
+
+    def reported_timing(self) -> dict | None:
+        """What the external renderer reported of its own time (``frame_ms`` in ms,
+        optionally ``device`` and other keys), or None when it reported nothing."""
+        ...
+
+
+def renders_elsewhere(method: Method) -> bool:
+    """Whether ``method`` has the capability :class:`ExternalMethod`."""
+    return isinstance(method, ExternalMethod)
 
 
 def has_gl_runner(method: Method) -> bool:

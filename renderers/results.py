@@ -66,10 +66,12 @@ class RenderResult:
     ----------
     renderer : str
         ``"caustics_mapping"`` or ``"mitsuba"``.
-    camera : ndarray, (H, W, 3), float32
-        Linear radiance from the scene camera.
+    camera : ndarray, (H, W, 3), float32, or None
+        Linear radiance from the scene camera; None: the method gave no camera image
+        (an external render of the receivers alone), and the camera is not scored.
     receivers : tuple of ReceiverMap
-        One per ``scene.receivers`` entry, in order.
+        One per ``scene.receivers`` entry, in order; empty: the method gave no
+        receiver map (an external render of the camera alone), and none is scored.
     effects : tuple of str
         The effects simulated (``scenes.effects_of``).
     timings : dict
@@ -88,7 +90,7 @@ class RenderResult:
     """
 
     renderer: str
-    camera: np.ndarray
+    camera: np.ndarray | None
     receivers: tuple[ReceiverMap, ...]
     effects: tuple[str, ...]
     timings: dict[str, float] = field(default_factory=dict)

@@ -228,7 +228,8 @@ class Headline:
         ``noise_floor`` (the method's error is within the reference's noise),
         ``speedup`` (the equal-error speedup, or why it is withheld), ``claim``
         (a paper claim's verdict), ``budget`` (a flux budget that does not close),
-        ``checks`` (accuracy checks that failed, each cited).
+        ``checks`` (accuracy checks that failed, each cited), ``timing`` (a time
+        reported by an external renderer, not measured by the harness).
     level : str
         ``warning`` (read before any number below) or ``note``.
     text : str

@@ -157,7 +157,10 @@ def stability_summary(scene: Scene, geometry: SceneGeometry, result: RenderResul
     safeguarded estimators' outcomes at the most iterations measured (``diverged``
     and ``oscillating`` must be 0).
     """
-    arrays = [result.camera] + [m.irradiance for m in result.receivers]
+    # A view the method did not give (RenderResult.camera None, no receivers) is not
+    # checked.
+    arrays = ([result.camera] if result.camera is not None else []) + [
+        m.irradiance for m in result.receivers]
     finite = bool(all(np.isfinite(a).all() for a in arrays))
     negative = int(sum(np.count_nonzero(np.asarray(a) < 0) for a in arrays))
     least = float(min(np.nanmin(a) if np.size(a) else 0.0 for a in arrays))

@@ -126,9 +126,12 @@ def flux_budget(metadata: Mapping, stability: Mapping | None,
             share = (stability or {}).get(key)
             if share is not None:
                 rows.append((label, watts(share), share))
-    method_w, reference_w = _received(method_maps), _received(reference_maps)
+    # A method that gave no receiver maps (a camera-only external render) has no
+    # received flux to state.
+    method_w = _received(method_maps) if method_maps else None
+    reference_w = _received(reference_maps)
     for label, value in ((METHOD_ROW, method_w), (REFERENCE_ROW, reference_w)):
-        fraction = value / traced if traced else None
+        fraction = value / traced if traced and value is not None else None
         rows.append((label, value, fraction))
     return Table(BUDGET_COLUMNS, tuple(rows))
 

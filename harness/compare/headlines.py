@@ -35,6 +35,9 @@ error it is computed for means nothing (``speedup_withheld``). Rules:
   it is undecided at this noise.
 * **budget**: a side's flux budget that does not add up to its emitted flux within
   :data:`BUDGET_CLOSURE` (1e-3).
+* **timing**: the time an external renderer reported of itself
+  (``harness.compare.external``), shown as reported and labelled as not measured by
+  the harness; no speedup is computed from it.
 * **checks**: every accuracy check that failed (a known gap is not a failure), each
   cited with its value and bound, first on the page. Headlines are made last in
   the pipeline, after the checks, so that they can.
@@ -207,11 +210,27 @@ def _checks_headline(comparison: SceneComparison) -> list[Headline]:
         f"{len(failed)} accuracy check{'s' if len(failed) > 1 else ''} failed: {cited}."))]
 
 
+def _reported_timing_headline(comparison: SceneComparison) -> list[Headline]:
+    """The time an external renderer reported, as reported (module docstring)."""
+    reported = comparison.provenance.method.metadata.get("reported_timing")
+    if not reported:
+        return []
+    frame = reported.get("frame_ms")
+    device = reported.get("device")
+    said = (f"{frame:.4g} ms a frame" if frame is not None else "no frame time")
+    said += f" on {device}" if device else ""
+    return [Headline("timing", "note", (
+        f"Time {reported.get('label', 'reported by the renderer')}: {said}. No "
+        "equal-error speedup is computed from it: the harness times only what it "
+        "renders."))]
+
+
 def headlines_for(comparison: SceneComparison) -> tuple[tuple[Headline, ...],
                                                          SpeedupWithheld | None]:
     """The banners of ``comparison`` and the speedup it withholds (module docstring)."""
     out = (_checks_headline(comparison) + _noise_headlines(comparison)
            + _verdict_headline(comparison))
+    out += _reported_timing_headline(comparison)
     speedup, withheld = _speedup(comparison)
     if speedup is not None:
         out.append(speedup)

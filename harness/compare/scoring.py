@@ -141,8 +141,10 @@ def views_of(scene: Scene, geometry: SceneGeometry, method: RenderResult,
     reference, independent = references
     views, notes = [], ()
     ptracer = reference.metadata.get("camera_integrator") == "ptracer"
-    if ptracer and camera_is_blind(reference.camera, method.camera):
-        notes = ("camera not compared: the reference camera image is black "
+    if method.camera is None:
+        notes += ("camera not scored: the method gave no camera image",)
+    elif ptracer and camera_is_blind(reference.camera, method.camera):
+        notes += ("camera not compared: the reference camera image is black "
                  "(ptracer cannot see receivers through a specular surface)",)
     else:
         obj = object_mask(scene.camera, geometry)
@@ -152,6 +154,9 @@ def views_of(scene: Scene, geometry: SceneGeometry, method: RenderResult,
         views.append(View("camera", method.camera, reference.camera, independent.camera,
                           regions, {"mask_object": obj}, ~obj if ptracer else None,
                           reference.metadata.get("camera_variance")))
+    if not method.receivers:
+        notes += ("receiver maps not scored: the method gave none",)
+        return views, notes
     for i, (method_map, ref_map, ind_map) in enumerate(zip(
             method.receivers, reference.receivers, independent.receivers, strict=True)):
         caustic = scene_caustic_region(ind_map.irradiance)

@@ -12,6 +12,10 @@ first-call set-up), then ``repeats`` timed renders; the warm time is their media
   geometry build for the render and the studies): the clock is the sum of the
   frame's per-pass times, each pass bracketed by ``ctx.finish()`` and
   ``time.perf_counter`` on llvmpipe (GL timer queries where they are valid).
+* A method whose images were rendered elsewhere
+  (:class:`renderers.methods.ExternalMethod`): read once and not timed; its time is
+  NaN, and what its renderer reported is carried in its metadata, labelled as not
+  measured by the harness.
 * Any other method: the sum of the passes it reports (``RenderResult.timings``), or
   else ``time.perf_counter`` around its ``render`` call, which also holds whatever
   set-up the method repeats per call (the timer says so).
@@ -20,6 +24,7 @@ first-call set-up), then ``repeats`` timed renders; the warm time is their media
 from __future__ import annotations
 
 import contextlib
+import math
 import statistics
 import time
 from collections.abc import Callable, Iterator
@@ -27,7 +32,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from harness.studies.runner import RealtimeRunner, caustic_seconds, frame_seconds
-from renderers.methods import Method, has_gl_runner
+from renderers.methods import Method, has_gl_runner, renders_elsewhere
 from renderers.results import RenderResult
 from scenes import Scene
 from scenes.geometry import SceneGeometry
@@ -138,6 +143,10 @@ def timed_render(method: Method, scene: Scene, *, repeats: int,
                            "after a warm-up", result.records,
                            runner.median(clock=caustic_seconds),
                            runner.ctx.info.get("GL_RENDERER", "unknown"))
+    if renders_elsewhere(method):
+        # Reading files is not rendering: nothing here would time the renderer.
+        return TimedRender(render_method(method, scene), math.nan,
+                           "not measured by the harness (images rendered elsewhere)")
     render_method(method, scene)
     walls, sums, result = [], [], None
     for _ in range(repeats):

@@ -1,0 +1,70 @@
+"""``caustics score SCENE --camera FILE.exr [--receiver N=FILE.exr ...] -o DIR``: images
+rendered anywhere, scored by the comparison pipeline (``docs/scoring-external-renders.md``).
+
+Every file is checked before any reference is rendered or anything is written: a bad
+one is one ``error:`` line naming it (exit 1). The timing report is ``--timing
+FILE.json``, else a ``render.json`` beside the first image when there is one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from harness.api import score as score_images
+from harness.commands.compare import print_summary
+from harness.commands.scene import print_warning
+from harness.compare.external import NOT_MEASURED, ExternalRenderError
+from harness.terminal import markup
+from scenes import default_scene_path, parse_override
+
+__all__ = ["parse_receiver", "score"]
+
+#: The timing report looked for beside the images when ``--timing`` is not given.
+TIMING_FILE = "render.json"
+
+
+def parse_receiver(text: str) -> tuple[int, Path]:
+    """``--receiver N=FILE.exr``: receiver index N and its file."""
+    index, sep, path = text.partition("=")
+    if not sep or not index.strip().isdigit() or not path:
+        raise argparse.ArgumentTypeError(f"expected N=FILE.exr (N a receiver index), "
+                                         f"got {text!r}")
+    return int(index), Path(path)
+
+
+def _timing_file(args: argparse.Namespace) -> Path | None:
+    """``--timing``, else ``render.json`` beside the first image given, if it exists."""
+    if args.timing is not None:
+        return Path(args.timing)
+    first = args.camera or next((p for _, p in args.receiver or ()), None)
+    beside = Path(first).parent / TIMING_FILE if first is not None else None
+    return beside if beside is not None and beside.is_file() else None
+
+
+def score(args: argparse.Namespace) -> int:
+    """``caustics score``: check the files, run the pipeline, write, summarise.
+
+    Returns 0; 1 (through :mod:`harness.cli`) for a bad file or a failed comparison.
+    """
+    start = time.perf_counter()
+    receivers: dict[int, Path] = {}
+    for index, path in args.receiver or ():
+        if index in receivers:
+            raise ExternalRenderError(f"receiver {index}: given twice ({receivers[index]}, "
+                                      f"{path})")
+        receivers[index] = path
+    overrides = dict(parse_override(item) for item in args.set or [])
+    timing = _timing_file(args)
+    comparison = score_images(
+        args.scene or str(default_scene_path()), camera=args.camera, receivers=receivers,
+        timing=timing, settings=overrides, cache_dir=args.cache_dir,
+        use_cache=not args.no_cache, output=args.output, progress=not args.quiet,
+        on_warning=print_warning)
+    print_summary([comparison.record], Path(args.output), time.perf_counter() - start)
+    reported = comparison.record.provenance.method.metadata.get("reported_timing")
+    if reported:
+        print(markup(f"time ({NOT_MEASURED}, from {timing}): "
+                     + ", ".join(f"{k} {v}" for k, v in reported.items() if k != "label")))
+    return 0
