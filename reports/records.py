@@ -229,7 +229,8 @@ class Headline:
         ``speedup`` (the equal-error speedup, or why it is withheld), ``claim``
         (a paper claim's verdict), ``budget`` (a flux budget that does not close),
         ``checks`` (accuracy checks that failed, each cited), ``timing`` (a time
-        reported by an external renderer, not measured by the harness).
+        reported by an external renderer, not measured by the harness), ``views`` (a
+        view the method gave no image of, not scored).
     level : str
         ``warning`` (read before any number below) or ``note``.
     text : str

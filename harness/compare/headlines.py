@@ -38,6 +38,8 @@ error it is computed for means nothing (``speedup_withheld``). Rules:
 * **timing**: the time an external renderer reported of itself
   (``harness.compare.external``), shown as reported and labelled as not measured by
   the harness; no speedup is computed from it.
+* **views**: a view the method gave no image of (an external render of the camera
+  or the receivers alone), not scored.
 * **checks**: every accuracy check that failed (a known gap is not a failure), each
   cited with its value and bound, first on the page. Headlines are made last in
   the pipeline, after the checks, so that they can.
@@ -230,6 +232,8 @@ def headlines_for(comparison: SceneComparison) -> tuple[tuple[Headline, ...],
     """The banners of ``comparison`` and the speedup it withholds (module docstring)."""
     out = (_checks_headline(comparison) + _noise_headlines(comparison)
            + _verdict_headline(comparison))
+    out += [Headline("views", "note", f"{note[0].upper()}{note[1:]}.")
+            for note in comparison.provenance.notes if " not scored: " in note]
     out += _reported_timing_headline(comparison)
     speedup, withheld = _speedup(comparison)
     if speedup is not None:
