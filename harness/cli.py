@@ -198,10 +198,13 @@ def _compare_command(subparsers) -> None:
     _cache_options(p)
 
 
-def _receiver_file(text: str):
-    """``--receiver N=FILE.exr`` (parsed by the command's module, imported only now)."""
-    from harness.commands.score import parse_receiver
-    return parse_receiver(text)
+def _receiver_file(text: str) -> tuple[int, str]:
+    """``--receiver N=FILE.exr``: receiver index N and its file."""
+    index, sep, path = text.partition("=")
+    if not sep or not index.strip().isdigit() or not path:
+        raise argparse.ArgumentTypeError(f"expected N=FILE.exr (N a receiver index), "
+                                         f"got {text!r}")
+    return int(index), path
 
 
 def _score_command(subparsers) -> None:

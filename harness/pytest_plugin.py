@@ -19,8 +19,9 @@ Options (``pytest --help``, group "caustics-harness"; each also an ini key)
 Fixture
 -------
 ``caustics`` (session): a :class:`CausticsSession`: ``compare``, ``comparison``,
-``load_scene``, ``render_reference`` (the :mod:`harness.api` functions with the
-session's cache, each comparison computed once per session) and the assertions.
+``score`` (images rendered elsewhere), ``load_scene``, ``render_reference`` (the
+:mod:`harness.api` functions with the session's cache, each comparison computed once
+per session) and the assertions.
 
 Assertions
 ----------
@@ -175,6 +176,17 @@ class CausticsSession:
     def comparison(self, scene, method, **options: Any) -> Comparison:
         """The one comparison of ``method`` on ``scene`` (:meth:`compare`)."""
         return self.compare(scene, [method], **options).get()
+
+    def score(self, scene, *, camera=None, receivers=None, **options: Any) -> Comparison:
+        """:func:`harness.api.score` with the session's cache: images rendered outside
+        the harness (EXR files) scored against the reference, ready for the
+        assertions. Not cached per session: the files may change between calls."""
+        from harness import api  # noqa: PLC0415 - keeps moderngl out of pytest start-up
+
+        done = api.score(scene, camera=camera, receivers=receivers,
+                         **{"cache_dir": self.cache_dir, **options})
+        self._record(done)
+        return done
 
     def assert_excess_below(self, comparison: Comparison, metric: str, bound: float, *,
                             view: str = "receiver0", region: str = "caustic") -> None:

@@ -19,19 +19,10 @@ from harness.compare.external import NOT_MEASURED, ExternalRenderError
 from harness.terminal import markup
 from scenes import default_scene_path, parse_override
 
-__all__ = ["parse_receiver", "score"]
+__all__ = ["TIMING_FILE", "score"]
 
 #: The timing report looked for beside the images when ``--timing`` is not given.
 TIMING_FILE = "render.json"
-
-
-def parse_receiver(text: str) -> tuple[int, Path]:
-    """``--receiver N=FILE.exr``: receiver index N and its file."""
-    index, sep, path = text.partition("=")
-    if not sep or not index.strip().isdigit() or not path:
-        raise argparse.ArgumentTypeError(f"expected N=FILE.exr (N a receiver index), "
-                                         f"got {text!r}")
-    return int(index), Path(path)
 
 
 def _timing_file(args: argparse.Namespace) -> Path | None:
@@ -54,7 +45,7 @@ def score(args: argparse.Namespace) -> int:
         if index in receivers:
             raise ExternalRenderError(f"receiver {index}: given twice ({receivers[index]}, "
                                       f"{path})")
-        receivers[index] = path
+        receivers[index] = Path(path)
     overrides = dict(parse_override(item) for item in args.set or [])
     timing = _timing_file(args)
     comparison = score_images(

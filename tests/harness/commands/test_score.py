@@ -4,13 +4,13 @@ scored as an external render, and every kind of bad file refused in one line."""
 from __future__ import annotations
 
 import json
-import shutil
 
 import numpy as np
 import pytest
 
 from harness.cli import main
 from renderers.exr import read_exr, write_exr
+from scenes import parse_override
 from tests.harness.commands.test_compare import SMALL, _small_scene
 
 
@@ -133,11 +133,26 @@ def test_each_bad_file_is_one_line_naming_it_and_nothing_is_written(strong, tmp_
 
 def test_no_view_and_a_missing_file_are_refused(strong, tmp_path, capsys):
     """No image at all, and a file that is not there: one line each, nothing written."""
-    scene, folder = strong
+    scene, _ = strong
     assert _score(scene, tmp_path / "none") == 1
     assert "no image to score" in capsys.readouterr().err
     missing = tmp_path / "nowhere.exr"
     assert _score(scene, tmp_path / "gone", "--camera", str(missing)) == 1
     err = capsys.readouterr().err
     assert f"{missing}: no such file" in err
-    shutil.rmtree(tmp_path / "none", ignore_errors=True)
+    assert not (tmp_path / "none").exists() and not (tmp_path / "gone").exists()
+
+
+def test_the_api_and_the_pytest_fixture_score_the_same_files(strong, caustics):
+    """Regression lock: ``caustics.score`` (the pytest fixture, through
+    ``harness.api.score``) on strong's receiver map gives compare's excess relMSE,
+    and the fixture's assertions take its comparison."""
+    scene, folder = strong
+    settings = dict(parse_override(SMALL[i + 1]) for i in range(0, len(SMALL), 2))
+    comparison = caustics.score(scene, receivers={0: folder / "receiver0_method.exr"},
+                                settings=settings)
+    m = comparison.metric("relmse", view="receiver0", region="caustic")
+    compared = _metrics(folder)[("receiver0", "caustic", "relmse")]
+    assert m.excess == pytest.approx(compared["excess"], rel=1e-6)
+    assert comparison.method == "external"
+    caustics.assert_excess_below(comparison, "relmse", 1.0)
