@@ -9,14 +9,16 @@ FILE.json``, else a ``render.json`` beside the first image when there is one.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
 from harness.api import score as score_images
 from harness.commands.compare import print_summary
 from harness.commands.scene import print_warning
+from harness.compare.consistency import disagreements as output_disagreements
 from harness.compare.external import NOT_MEASURED, ExternalRenderError
-from harness.terminal import markup
+from harness.terminal import markup, plain
 from scenes import default_scene_path, parse_override
 
 __all__ = ["TIMING_FILE", "score"]
@@ -37,7 +39,9 @@ def _timing_file(args: argparse.Namespace) -> Path | None:
 def score(args: argparse.Namespace) -> int:
     """``caustics score``: check the files, run the pipeline, write, summarise.
 
-    Returns 0; 1 (through :mod:`harness.cli`) for a bad file or a failed comparison.
+    Returns 0; 1 for a bad file or a failed comparison (through :mod:`harness.cli`),
+    or when two written copies of one number disagree
+    (:mod:`harness.compare.consistency`).
     """
     start = time.perf_counter()
     receivers: dict[int, Path] = {}
@@ -58,4 +62,7 @@ def score(args: argparse.Namespace) -> int:
     if reported:
         print(markup(f"time ({NOT_MEASURED}, from {timing}): "
                      + ", ".join(f"{k} {v}" for k, v in reported.items() if k != "label")))
-    return 0
+    disagreements = output_disagreements(Path(args.output))
+    for line in disagreements:
+        print(f"error: inconsistent output: {plain(line)}", file=sys.stderr)
+    return 1 if disagreements else 0
