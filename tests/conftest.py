@@ -1,7 +1,7 @@
 """Shared fixtures: paths into the repository, a minimal valid scene, the GL
 context in the style of moderngl's own tests/conftest.py (ONE context factory for
 the session, and a ``ctx`` fixture asserting GL_NO_ERROR before and after a test),
-the run's one headless Chromium (``chromium``, ``tests/browser.py``), and the run's
+one headless Chromium per test process (``chromium``, ``tests/browser.py``), and the run's
 one Mitsuba reference cache.
 
 The reference cache is content-addressed and locks per key, so one folder serves
@@ -91,7 +91,8 @@ def context_factory():
 
 @pytest.fixture(scope="session")
 def chromium():
-    """The run's one headless Chromium (per xdist worker); modules open contexts on it."""
+    """The process's one headless Chromium (one per xdist worker: at most two in the
+    default run, which keeps each test file on one worker); modules open contexts on it."""
     browser.require_browser()
     with browser.launch() as instance:
         yield instance
@@ -136,20 +137,6 @@ def pytest_configure(config):
         fresh = tempfile.mkdtemp(prefix="caustics-test-references-")
         config.stash[_OWNED_CACHE] = fresh
         os.environ[CACHE_ENV] = fresh
-
-
-@pytest.hookimpl(tryfirst=True)  # before xdist reads the groups into the node ids
-def pytest_collection_modifyitems(config, items):
-    """Under xdist's ``--dist loadgroup``, each test module runs on one worker (its
-    module fixtures are built once), and every test that uses the browser runs on
-    the same worker (with the rest of its module), so the run starts one Chromium."""
-    browser_modules = {item.module.__name__ for item in items
-                       if "chromium" in item.fixturenames}
-    for item in items:
-        if item.get_closest_marker("xdist_group") is None:
-            module = item.module.__name__
-            group = "browser" if module in browser_modules else module
-            item.add_marker(pytest.mark.xdist_group(group))
 
 
 def pytest_unconfigure(config):
