@@ -1,8 +1,9 @@
 """One headless Chromium per test process (Debian's ``chromium``, driven by
 Playwright; the default run's two xdist workers start at most two):
 ``tests/conftest.py`` launches it once per process as the session fixture
-``chromium``, and each browser test module opens its own fresh browser context on it (:func:`new_context`: no cookies, storage or cache shared between
-modules), instead of a browser of its own.
+``chromium``, and each browser test module opens its own fresh browser context on
+it (:func:`new_context`: no cookies, storage or cache shared between modules),
+instead of a browser of its own.
 
 A missing browser or ``playwright`` skips the browser tests with the reason, except
 under CI (``CI`` set), where it is a failure: ``python -m harness.system`` installs
