@@ -88,6 +88,15 @@ def score_value(metric: str, method, reference, *, mask, exposure: Exposure) -> 
 METRICS = ("relmse", "relmse_trimmed", "psnr", "ssim", "flip", "flux_ratio")
 
 
+def _perceptual_maps(method, reference, exposure: Exposure) -> tuple[np.ndarray, np.ndarray]:
+    """The full-image SSIM and FLIP maps (H, W) of ``method`` against ``reference``, as
+    :func:`score_value` computes them (FLIP of :func:`flip_input` of ``method``)."""
+    _, ssim_map = structural_similarity(method, reference, white=exposure.white, return_map=True)
+    _, flip_map = flip_error(flip_input(method), reference, start_exposure=exposure.flip_start,
+                             stop_exposure=exposure.flip_stop, return_map=True)
+    return ssim_map, flip_map
+
+
 def score_view(view: str, method, reference, independent, *, regions: dict[str, np.ndarray],
                exposure: Exposure, variance=None, seeds: int | None = None,
                channel_correlation: float = 1.0, seed_estimates=None,
@@ -123,9 +132,17 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
         The metric values, and ``{"<view>/signed", "<view>/ssim", "<view>/flip"}``
         maps over the full image (float32; SSIM and FLIP rounded to half precision).
     """
-    _, ssim_map = structural_similarity(method, reference, white=exposure.white, return_map=True)
-    _, flip_map = flip_error(flip_input(method), reference, start_exposure=exposure.flip_start,
-                             stop_exposure=exposure.flip_stop, return_map=True)
+    ssim_map, flip_map = _perceptual_maps(method, reference, exposure)
+    # The noise floor's SSIM and FLIP maps, made once for every region (a region's
+    # value is its map's mean over the mask, as score_value computes it).
+    floor_maps = {}
+    if independent is not None:
+        try:
+            floor_maps = dict(zip(("ssim", "flip"),
+                                  _perceptual_maps(independent, reference, exposure),
+                                  strict=True))
+        except MetricInputError:
+            floor_maps = {}
     inputs = None
     if variance is not None and seeds is not None and seeds >= 2:
         inputs = ExcessInputs(np.asarray(variance), int(seeds), channel_correlation,
@@ -138,9 +155,14 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
         if not mask.any():
             continue
         for metric in METRICS:
-            value = score_value(metric, method, reference, mask=mask, exposure=exposure)
+            if metric in ("ssim", "flip"):
+                value = float((ssim_map if metric == "ssim" else flip_map)[mask].mean())
+            else:
+                value = score_value(metric, method, reference, mask=mask, exposure=exposure)
             floor = None
-            if independent is not None:
+            if metric in floor_maps:
+                floor = float(floor_maps[metric][mask].mean())
+            elif independent is not None:
                 floor = score_value(metric, independent, reference, mask=mask,
                                     exposure=exposure)
             excess = metric_excess(metric, method, reference, mask, inputs,
