@@ -250,6 +250,12 @@ def _export_command(subparsers) -> None:
                    help="gltf: DIR/<scene>.glb (KHR lights and materials, a camera per "
                    "receiver); mitsuba: DIR/scene.xml and DIR/meshes/*.ply, the reference's "
                    "own Mitsuba scene (default %(default)s)")
+    p.add_argument("--mitsuba-bsdf", choices=("stock", "harness"), default="stock",
+                   help="dielectrics in the XML: stock, Mitsuba's own dielectric (loads "
+                   "in any Mitsuba 3; each way it differs from the reference's BSDF is "
+                   "printed as a note); harness, the reference's chain_dielectric plugin "
+                   "(exact; load it after renderers.mitsuba.bsdf.register) "
+                   "(default %(default)s)")
     p.add_argument("--gltf-container", choices=("glb", "gltf"), default="glb",
                    help="one binary .glb, or a .gltf with its .bin beside it "
                    "(default %(default)s)")

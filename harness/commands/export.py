@@ -6,7 +6,9 @@ outside the process.
   shapes within ``--tolerance`` metres of their surface.
 * ``mitsuba``: ``DIR/scene.xml`` (a dispersion scene: ``scene_r.xml``, ``scene_g.xml``,
   ``scene_b.xml``) and ``DIR/meshes/*.ply``, :func:`renderers.mitsuba.scene_xml.write_scene_xml`:
-  the reference's own Mitsuba scene, the same triangles.
+  the reference's own Mitsuba scene, the same triangles; dielectrics as Mitsuba's stock
+  ``dielectric`` (``--mitsuba-bsdf stock``, each difference from the reference printed
+  as a ``note:`` line) or the reference's ``chain_dielectric`` plugin (``harness``).
 
 The mapping, units, axes and receiver frames are ``docs/export.md``.
 """
@@ -37,12 +39,21 @@ def export(args: argparse.Namespace) -> int:
             print("error: --tolerance applies to --format gltf: the Mitsuba XML holds the "
                   "triangles the reference renders", file=sys.stderr)
             return 2
-        from renderers.mitsuba.scene_xml import write_scene_xml  # noqa: PLC0415 (Mitsuba)
+        from renderers.mitsuba.scene_xml import (  # noqa: PLC0415 (Mitsuba)
+            stock_differences,
+            write_scene_xml,
+        )
 
-        written = write_scene_xml(scene, folder)
+        written = write_scene_xml(scene, folder, bsdf=args.mitsuba_bsdf)
+        if args.mitsuba_bsdf == "stock":
+            for line in stock_differences(scene):
+                print(f"note: {plain(scene.name)}: {plain(line)}", file=sys.stderr)
         print(f"{plain(scene.name)}: wrote {', '.join(plain(p) for p in written)} and "
               f"{plain(folder / 'meshes')}/", file=sys.stderr)
         return 0
+    if args.mitsuba_bsdf != "stock":
+        print("error: --mitsuba-bsdf applies to --format mitsuba", file=sys.stderr)
+        return 2
     from scenes.export import export_gltf  # noqa: PLC0415 - pygltflib, only here
 
     done = export_gltf(scene, folder / f"{scene.name}.{args.gltf_container}",

@@ -9,11 +9,15 @@ no second mapping.
 
 * Objects keep the dict's keys as ids (``id`` and ``name``): shapes ``receiver_<i>`` and
   ``object_<i>``, indexed like the scene's lists, ``light``, ``sensor``, ``integrator``.
-* Dielectrics are the ``chain_dielectric`` BSDF (:mod:`.bsdf`: Fresnel only when the
-  scene asks, Beer-Lambert absorption on exit), a Python plugin: a process loads the XML
-  after registering it (:func:`load_scene_xml` does; any other Mitsuba 3 process does so
-  with ``renderers.mitsuba.bsdf.register(mi, dr)``, or swaps in a stock ``dielectric``
-  with ``int_ior`` = ``eta``, which always weights by Fresnel).
+* Dielectrics, with ``bsdf="stock"`` (the default), are Mitsuba's own ``dielectric``
+  (``int_ior`` = the scene's IOR, ``ext_ior`` = 1): the file loads in any Mitsuba 3
+  process. It is the reference's BSDF exactly where the scene weights by Fresnel and
+  absorbs nothing; otherwise :func:`stock_differences` names each difference (it always
+  weights by Fresnel; it has no Beer-Lambert absorption). With ``bsdf="harness"`` they
+  are the reference's own ``chain_dielectric`` (:mod:`.bsdf`: Fresnel only when the
+  scene asks, Beer-Lambert absorption on exit), a Python plugin: a process loads that
+  XML after registering it (:func:`load_scene_xml` does; any other Mitsuba 3 process
+  does so with ``renderers.mitsuba.bsdf.register(mi, dr)``).
 * Dispersion (an IOR per channel) is one file per channel pass, ``scene_r.xml``,
   ``scene_g.xml``, ``scene_b.xml``, as the reference renders it: each with that
   channel's IOR and the light's power in that channel only; their sum is the scene.
@@ -21,10 +25,10 @@ no second mapping.
 * The sensor is the scene camera, the integrator a plain ``ptracer``; units are the
   reference's (W/sr, W/m^2, radiance W m^-2 sr^-1).
 
-Mitsuba's parser does not know a Python plugin's object type, so the writer is handed a
-stock ``dielectric`` in its place and the plugin's name is put back on those nodes
-before writing (each is recognised by its ``tir_reflects`` property, which only
-``chain_dielectric`` has).
+Mitsuba's parser does not know a Python plugin's object type, so for ``bsdf="harness"``
+the writer is handed a stock ``dielectric`` in its place and the plugin's name is put
+back on those nodes before writing (each is recognised by its ``tir_reflects``
+property, which only ``chain_dielectric`` has).
 """
 
 from __future__ import annotations
@@ -37,30 +41,62 @@ from renderers.mitsuba.bsdf import BSDF_NAME
 from renderers.mitsuba.exporter import ExportedScene, exported, mitsuba_mesh, scene_dict
 from scenes import effects_of
 from scenes.geometry import build_geometry
-from scenes.model import Scene
+from scenes.model import DielectricMaterial, Scene
 
-__all__ = ["CHANNEL_FILES", "load_scene_xml", "write_scene_xml"]
+__all__ = ["BSDFS", "CHANNEL_FILES", "load_scene_xml", "stock_differences", "write_scene_xml"]
 
 #: The files of a dispersion scene's channel passes (0, 1, 2 = red, green, blue).
 CHANNEL_FILES = {None: "scene.xml", 0: "scene_r.xml", 1: "scene_g.xml", 2: "scene_b.xml"}
 _STAND_IN = "dielectric"
+#: How the XML writes a dielectric: Mitsuba's own BSDF, or the reference's plugin.
+BSDFS = ("stock", "harness")
 #: Top-level XML elements that are scene objects (``<default>`` is a parameter).
 _OBJECTS = {"shape", "emitter", "sensor", "integrator"}
 
 
-def _stand_in(value):
-    """``value`` with every ``chain_dielectric`` dict typed as a stock dielectric."""
+def _stand_in(value, *, stock: bool):
+    """``value`` with every ``chain_dielectric`` dict typed as a stock dielectric: with
+    ``stock``, Mitsuba's own (relative IOR ``eta`` = ``int_ior`` / ``ext_ior``, the
+    outside being vacuum as in the reference); otherwise the plugin's properties kept,
+    for :func:`_write` to name the plugin again."""
     if isinstance(value, dict):
-        out = {k: _stand_in(v) for k, v in value.items()}
+        out = {k: _stand_in(v, stock=stock) for k, v in value.items()}
         if out.get("type") == BSDF_NAME:
+            if stock:
+                return {"type": _STAND_IN, "int_ior": out["eta"], "ext_ior": 1.0}
             out["type"] = _STAND_IN
         return out
     return value
 
 
-def _write(mi, variant: str, desc: dict, path: Path) -> None:
+def stock_differences(scene: Scene) -> tuple[str, ...]:
+    """Where a stock ``dielectric`` is not the reference's BSDF, one line per object
+    (empty where the stock file is the reference's scene exactly).
+
+    Mitsuba's ``dielectric`` reflects with probability F and transmits otherwise, which
+    is the reference's rule for ``fresnel = true``; with ``fresnel = false`` the
+    reference transmits every photon with weight one (and drops one whose chain meets
+    total internal reflection). It has no interior absorption: the reference weights a
+    particle leaving the medium by exp(-sigma t).
+    """
+    lines = []
+    for index, obj in enumerate(scene.objects):
+        material = obj.material
+        if not isinstance(material, DielectricMaterial):
+            continue
+        where = f"objects[{index}].material"
+        if not material.fresnel:
+            lines.append(f"{where}: the scene transmits every photon (fresnel = false); "
+                         "Mitsuba's dielectric weights by Fresnel")
+        if any(s > 0 for s in material.absorption):
+            lines.append(f"{where}: absorption {list(material.absorption)} 1/m is not in "
+                         "Mitsuba's dielectric (it has no Beer-Lambert term)")
+    return tuple(lines)
+
+
+def _write(mi, variant: str, desc: dict, path: Path, *, stock: bool) -> None:
     config = mi.parser.ParserConfig(variant)
-    state = mi.parser.parse_dict(config, _stand_in(desc))
+    state = mi.parser.parse_dict(config, _stand_in(desc, stock=stock))
     for node in state.nodes:
         props = node.props
         if props.plugin_name() == _STAND_IN and "tir_reflects" in props:
@@ -77,8 +113,15 @@ def _write(mi, variant: str, desc: dict, path: Path) -> None:
     tree.write(path, encoding="unicode")
 
 
-def write_scene_xml(scene: Scene, folder: str | Path) -> tuple[Path, ...]:
+def write_scene_xml(scene: Scene, folder: str | Path, *, bsdf: str = "stock"
+                    ) -> tuple[Path, ...]:
     """Write ``scene`` as Mitsuba 3 XML into ``folder`` (created if missing).
+
+    Parameters
+    ----------
+    bsdf : {"stock", "harness"}
+        Dielectrics as Mitsuba's own ``dielectric`` (loads anywhere; see
+        :func:`stock_differences`) or as the reference's ``chain_dielectric`` plugin.
 
     Returns
     -------
@@ -86,6 +129,8 @@ def write_scene_xml(scene: Scene, folder: str | Path) -> tuple[Path, ...]:
         ``scene.xml``, or the three channel passes of a dispersion scene
         (:data:`CHANNEL_FILES`); the meshes are under ``meshes/`` beside them.
     """
+    if bsdf not in BSDFS:
+        raise ValueError(f"bsdf must be one of {BSDFS}, not {bsdf!r}")
     mi, _, variant = _mi.load()
     folder = Path(folder)
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
@@ -101,14 +146,14 @@ def write_scene_xml(scene: Scene, folder: str | Path) -> tuple[Path, ...]:
     for channel in channels:
         desc = scene_dict(scene, geometry=geometry, channel=channel, shape=ply)
         path = folder / CHANNEL_FILES[channel]
-        _write(mi, variant, desc, path)
+        _write(mi, variant, desc, path, stock=bsdf == "stock")
         written.append(path)
     return tuple(written)
 
 
 def load_scene_xml(path: str | Path, *, receivers: int, objects: int) -> ExportedScene:
-    """Load an XML file :func:`write_scene_xml` wrote (the ``chain_dielectric`` plugin
-    registered first), with its shapes' registry ids.
+    """Load an XML file :func:`write_scene_xml` wrote, either ``bsdf`` (the
+    ``chain_dielectric`` plugin registered first), with its shapes' registry ids.
 
     Raises
     ------

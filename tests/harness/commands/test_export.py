@@ -34,19 +34,33 @@ def test_mitsuba_writes_xml_and_meshes(tmp_path, capsys):
                                                              "scene_r.xml"]
     assert sorted(p.name for p in (tmp_path / "meshes").iterdir()) == ["object_0.ply",
                                                                       "receiver_0.ply"]
-    assert "chain_dielectric" in (tmp_path / "scene_r.xml").read_text()
-    assert "scene_r.xml" in capsys.readouterr().err
+    text = (tmp_path / "scene_r.xml").read_text()
+    assert 'type="dielectric"' in text and "chain_dielectric" not in text
+    err = capsys.readouterr().err
+    assert "scene_r.xml" in err
+    # The stock BSDF's one difference from the reference here: it weights by Fresnel.
+    assert [line for line in err.splitlines() if line.startswith("note:")] == [
+        "note: dispersion_sphere: objects[0].material: the scene transmits every photon "
+        "(fresnel = false); Mitsuba's dielectric weights by Fresnel"]
+    assert main(["export", "dispersion_sphere", "--format", "mitsuba", "--mitsuba-bsdf",
+                 "harness", "-o", str(tmp_path / "h")]) == 0
+    assert "chain_dielectric" in (tmp_path / "h" / "scene_r.xml").read_text()
+    assert "note:" not in capsys.readouterr().err
 
 
 def test_errors_are_one_line(tmp_path, capsys):
     """A tolerance no icosphere meets: exit 1 naming the file and field; --tolerance with
-    --format mitsuba, or not a positive number: exit 2."""
+    --format mitsuba, --mitsuba-bsdf with glTF, or a tolerance not a positive number:
+    exit 2."""
     assert main(["export", "glass_sphere", "-o", str(tmp_path), "--tolerance", "1e-9"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "glass_sphere.toml: objects[0].subdivisions" in err
     assert main(["export", "glass_sphere", "-o", str(tmp_path), "--format", "mitsuba",
                  "--tolerance", "1e-3"]) == 2
     assert "--tolerance applies to --format gltf" in capsys.readouterr().err
+    assert main(["export", "glass_sphere", "-o", str(tmp_path), "--mitsuba-bsdf",
+                 "harness"]) == 2
+    assert "--mitsuba-bsdf applies to --format mitsuba" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exit_:
         main(["export", "glass_sphere", "-o", str(tmp_path), "--tolerance", "0"])
     assert exit_.value.code == 2

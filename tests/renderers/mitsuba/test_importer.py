@@ -36,7 +36,7 @@ _SINGLE = [
 def test_round_trip(name, tmp_path):
     """Regression lock: the light, each material and the triangles come back (float32)."""
     scene = load_scene(resolve_scene(name))
-    write_scene_xml(scene, tmp_path)
+    write_scene_xml(scene, tmp_path, bsdf="harness")
     back = write_draft(read_mitsuba(tmp_path / "scene.xml"), tmp_path / "back.toml")
     assert type(back.light) is type(scene.light)
     for field in ("position", "intensity", "irradiance", "cutoff_angle"):
@@ -108,7 +108,7 @@ def test_tessellated_round_trip_has_the_same_reference(tmp_path):
     a side at 64 x 64 texels, agree: every flux ratio (total, encircled, regions) within
     4 standard errors of 1."""
     scene = load_scene(resolve_scene("glass_sphere"))
-    write_scene_xml(scene, tmp_path)
+    write_scene_xml(scene, tmp_path, bsdf="harness")
     back = write_draft(read_mitsuba(tmp_path / "scene.xml"), tmp_path / "back.toml")
     # The icosphere is recognised: a sphere again (same triangles, analytic normals).
     assert back.objects[0].center == scene.objects[0].center

@@ -1,7 +1,9 @@
 """Mitsuba 3 XML export (``renderers/mitsuba/scene_xml.py``): ``mi.load_file`` reads back
 the reference's own scene (same triangles, BSDFs, emitter, sensor), Mitsuba renders it as
 it renders the dict, and the photon tracer on it gives the reference's receiver
-irradiance within noise.
+irradiance within noise; the stock file (Mitsuba's own ``dielectric``) loads and renders
+in a Mitsuba process that knows nothing of the harness, and where the scene weights by
+Fresnel it renders what the reference's BSDF renders.
 
 Kind: physical requirements of the export (the same scene, so the same transport); the
 noise comparison uses the LuxCore cross-check's flux ratios (harness.crosscheck) with
@@ -9,16 +11,27 @@ their standard errors."""
 
 from __future__ import annotations
 
+import dataclasses
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
 from harness.crosscheck import compare_maps
 from renderers.mitsuba import load_mitsuba
 from renderers.mitsuba.exporter import export_scene
+from renderers.mitsuba.llvm import configure_drjit
 from renderers.mitsuba.photons import PhotonTracer
-from renderers.mitsuba.scene_xml import CHANNEL_FILES, load_scene_xml, write_scene_xml
+from renderers.mitsuba.scene_xml import (
+    CHANNEL_FILES,
+    load_scene_xml,
+    stock_differences,
+    write_scene_xml,
+)
 from renderers.results import ReceiverMap
-from scenes import load_scene, resolve_scene
+from scenes import bundled_scene_names, load_scene, resolve_scene
 from scenes.geometry import build_geometry
 
 #: |z| of a flux ratio that passes: each fails with probability 6e-5 under the normal
@@ -35,7 +48,7 @@ def _values(parameter) -> np.ndarray:
 
 def _written(tmp_path, name: str):
     scene = load_scene(resolve_scene(name))
-    paths = write_scene_xml(scene, tmp_path / name)
+    paths = write_scene_xml(scene, tmp_path / name, bsdf="harness")
     channels = [0, 1, 2] if len(paths) == 3 else [None]
     assert [p.name for p in paths] == [CHANNEL_FILES[c] for c in channels]
     loaded = {c: load_scene_xml(p, receivers=len(scene.receivers), objects=len(scene.objects))
@@ -140,3 +153,73 @@ def test_photon_tracer_on_the_xml_gives_the_references_irradiance(tmp_path):
                          variance=other.variance / 4)
     total = next(r for r in compare_maps(expected, halved) if r.kind == "total")
     assert abs(total.z) > 10 * Z_LIMIT
+
+
+#: A Mitsuba process that imports nothing but Mitsuba: it loads every file named on its
+#: command line and renders each with the file's own sensor and integrator (8 x 8 pixels,
+#: 4 samples), printing whether every pixel is finite and the largest pixel value.
+_PLAIN_MITSUBA = """
+import sys
+import mitsuba as mi
+mi.set_variant("llvm_ad_rgb")
+for path in sys.argv[1:]:
+    image = mi.TensorXf(mi.render(mi.load_file(path, resx=8, resy=8), spp=4)).numpy()
+    print(path, bool((abs(image) < float("inf")).all()), float(image.max()))
+"""
+
+
+def _with_fresnel(scene):
+    objects = tuple(dataclasses.replace(o, material=dataclasses.replace(o.material, fresnel=True))
+                    for o in scene.objects)
+    return dataclasses.replace(scene, objects=objects)
+
+
+def test_stock_xml_loads_in_a_mitsuba_that_knows_nothing_of_the_harness(tmp_path):
+    """Every bundled scene's stock export (``bsdf="stock"``, the default and what
+    ``caustics export --format mitsuba`` writes) loads and renders in a fresh Python
+    process that imports only Mitsuba (no plugin registered). Not vacuous: the
+    ``harness`` file of the same scene fails to load there, naming the plugin."""
+    paths = []
+    for name in bundled_scene_names():
+        paths += write_scene_xml(load_scene(resolve_scene(name)), tmp_path / name)
+    env = {**os.environ, "DRJIT_LIBLLVM_PATH": configure_drjit()}
+    done = subprocess.run([sys.executable, "-c", _PLAIN_MITSUBA, *map(str, paths)],
+                          capture_output=True, text=True, env=env, cwd=tmp_path, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    rendered = {line.split(" ")[0]: line.split(" ")[1:] for line in done.stdout.splitlines()}
+    assert list(rendered) == list(map(str, paths)) and len(paths) >= len(bundled_scene_names())
+    assert all(finite == "True" and float(peak) >= 0 for finite, peak in rendered.values())
+    # Lit where the camera sees a diffuse surface directly (the ptracer renders what it
+    # sees only through specular surfaces black: seabed's and water_pool's floor).
+    assert float(rendered[str(tmp_path / "glass_sphere" / "scene.xml")][1]) > 0
+    harness = write_scene_xml(load_scene(resolve_scene("glass_sphere")), tmp_path / "h",
+                              bsdf="harness")
+    refused = subprocess.run([sys.executable, "-c", _PLAIN_MITSUBA, str(harness[0])],
+                             capture_output=True, text=True, env=env, check=False)
+    assert refused.returncode != 0 and "chain_dielectric" in refused.stderr
+
+
+def test_stock_xml_is_the_reference_where_the_scene_weights_by_fresnel(tmp_path):
+    """glass_sphere with ``fresnel = true``: the stock file and the ``harness`` file give
+    the same ptracer image for the same seed (both reflect with probability F, weight
+    one; up to the order of atomic additions), and :func:`stock_differences` names no
+    difference. Without Fresnel (the bundled scene) it names the object, and the images
+    differ by the Fresnel losses (the reference transmits every photon)."""
+    mi, _, _ = load_mitsuba()
+    scene = _with_fresnel(load_scene(resolve_scene("glass_sphere")))
+    assert stock_differences(scene) == ()
+    plain = load_scene(resolve_scene("glass_sphere"))
+    assert [line.split(":")[0] for line in stock_differences(plain)] == [
+        "objects[0].material"]
+
+    def image(scene, bsdf, folder):
+        (path,) = write_scene_xml(scene, tmp_path / folder, bsdf=bsdf)
+        loaded = mi.load_file(str(path), resx=48, resy=48)
+        return np.asarray(mi.render(loaded, spp=4, seed=7))
+
+    stock = image(scene, "stock", "stock")
+    exact = image(scene, "harness", "harness")
+    assert exact.max() > 0
+    np.testing.assert_allclose(stock, exact, atol=1e-4 * exact.max())
+    no_fresnel = image(plain, "harness", "plain")
+    assert np.abs(no_fresnel - stock).max() > 1e-2 * exact.max()
