@@ -61,6 +61,8 @@ def _run(case: Case, tmp_path, capsys) -> tuple[int, str, str, dict]:
 def test_case(case: Case, tmp_path, capsys, monkeypatch):
     """Regression lock: the case's exit status, its one-line error (or its finite
     result), and no traceback."""
+    # Its own cache: a case that fails must leave nothing behind, cache included, and
+    # no case may read a reference another test traced.
     monkeypatch.setenv("CAUSTICS_CACHE_DIR", str(tmp_path / "cache"))
     status, out, err, places = _run(case, tmp_path, capsys)
     assert "Traceback" not in out + err, err

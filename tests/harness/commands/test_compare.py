@@ -1,4 +1,8 @@
-"""`caustics compare` end to end on a small glass sphere: files, numbers, cache."""
+"""`caustics compare` end to end on a small glass sphere: files, numbers, cache.
+
+The references are SMALL's budget, in the run's reference cache (``tests/conftest.py``):
+the committed scene's are traced once for the two tests that compare it, the 48 x 48
+copy's once for the tests that compare the copy."""
 
 from __future__ import annotations
 
@@ -19,6 +23,8 @@ SMALL = ["--set", "photons=100000", "--set", "seeds=2", "--set", "spp=2",
          "--set", "reference_time_cap=0.001",
          "--set", "grid=48", "--set", "caustic_map=128", "--set", "positions_map=128",
          "--set", "shadow_map=128", "--set", "receiver_map=[48, 48]"]
+#: SMALL's reference budget alone (the method at the scene's own settings).
+REFERENCE = SMALL[:8]
 
 
 def _small_scene(tmp_path):
@@ -36,9 +42,8 @@ def test_compare_writes_everything_and_reuses_the_cache(tmp_path, capsys):
     the equal-error speedups (warm and cold, regression lock: each is what the CSV's
     times of the same kind give) and the paper's claims; a second run takes both
     references from the cache."""
-    scene, out, cache = _small_scene(tmp_path), tmp_path / "out", tmp_path / "cache"
-    argv = ["compare", str(scene), "-o", str(out), "--quick", "--cache-dir", str(cache),
-            "-q", *SMALL]
+    scene, out = _small_scene(tmp_path), tmp_path / "out"
+    argv = ["compare", str(scene), "-o", str(out), "--quick", "-q", *SMALL]
     assert main(argv) == 0
     summary = capsys.readouterr().out
     assert "glass_sphere" in summary and "equal-error speedup" in summary
@@ -120,10 +125,10 @@ def test_compare_checks_every_kind_like_the_test_suite(tmp_path, capsys, monkeyp
     says why). With 0 iterations a lock fails and --fail-on-checks exits 3. A
     modified copy of the scene gets the physical requirements only."""
     monkeypatch.chdir(REPO)
-    out, cache = tmp_path / "out", tmp_path / "cache"
-    fast = ["--studies", "metrics", "--cache-dir", str(cache), "-q", "--set",
-            "photons=50000", "--set", "seeds=2", "--set", "spp=1", "--set",
-            "reference_time_cap=0.001", "--preset", "paper"]     # see SMALL
+    out = tmp_path / "out"
+    # REFERENCE's references, in the run's cache: the same as the bundled-name test's.
+    # The method renders at the scene's own settings (the locks' calibration).
+    fast = ["--studies", "metrics", "-q", "--preset", "paper", *REFERENCE]
     scene = str(SCENES / "glass_sphere.toml")
     assert main(["compare", scene, "-o", str(out), *fast, "--fail-on-checks"]) == 0
     summary = capsys.readouterr().out
@@ -149,7 +154,7 @@ def test_compare_checks_every_kind_like_the_test_suite(tmp_path, capsys, monkeyp
     locks = [t for t in data["checks"] if t["kind"] == "regression lock"]
     assert not all(t["passed"] for t in locks)
     copy = _small_scene(tmp_path)
-    assert main(["compare", str(copy), "-o", str(tmp_path / "copy"), *fast]) == 0
+    assert main(["compare", str(copy), "-o", str(tmp_path / "copy"), *fast, *SMALL[8:]]) == 0
     data = json.loads((tmp_path / "copy" / "glass_sphere-paper" / "metrics.json").read_text())
     assert {t["kind"] for t in data["checks"]} == {"physical requirement"}
 
@@ -160,8 +165,8 @@ def test_compare_by_bundled_name_from_any_directory(tmp_path, monkeypatch, capsy
     and names the method's images `<view>_method.exr`."""
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "out"
-    argv = ["compare", "glass_sphere", "-o", str(out), "--studies", "metrics",
-            "--cache-dir", str(tmp_path / "cache"), "-q", "--preset", "paper", *SMALL]
+    argv = ["compare", "glass_sphere", "-o", str(out), "--studies", "metrics", "-q",
+            "--preset", "paper", *REFERENCE]
     assert main(argv) == 0
     data = json.loads((out / "glass_sphere-paper" / "metrics.json").read_text())
     assert data["scene"]["source"].endswith("scenes/glass_sphere.toml")

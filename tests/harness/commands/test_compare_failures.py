@@ -45,7 +45,7 @@ def test_one_failing_scene_costs_only_its_row(tmp_path, monkeypatch, capsys):
     good, bad = _scene(tmp_path, "good"), _scene(tmp_path, "broken")
     out = tmp_path / "out"
     assert main(["compare", str(bad), str(good), "-o", str(out), "--preset", "paper",
-                 "--cache-dir", str(tmp_path / "cache"), "-q"]) == 1
+                 "-q"]) == 1
     assert _index_rows(out) == [("fail failure", "broken-paper"), ("", "good-paper")]
     assert "cannot be log-scaled" in (out / "broken-paper" / "index.html").read_text()
     failure = json.loads((out / "broken-paper" / "failure.json").read_text())
@@ -55,8 +55,7 @@ def test_one_failing_scene_costs_only_its_row(tmp_path, monkeypatch, capsys):
     assert [line for line in err.splitlines() if line.startswith("error:")] == [
         "error: broken-paper failed (comparison): ValueError: Data cannot be log-scaled "
         "because all values are <= 0."]
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken.toml", "cache", "good.toml",
-                                                          "out"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken.toml", "good.toml", "out"]
 
 
 def test_real_run_with_a_caustic_free_scene_and_a_failing_one(tmp_path, monkeypatch, capsys):
@@ -82,8 +81,7 @@ def test_real_run_with_a_caustic_free_scene_and_a_failing_one(tmp_path, monkeypa
                                                   "intensity = [0.0, 0.0, 0.0]"})
     out = tmp_path / "out"
     assert main(["compare", str(good), str(dark), str(broken), str(dark_light), "-o",
-                 str(out), "--quick", "--preset", "paper", "--cache-dir",
-                 str(tmp_path / "cache"), "-q", *SMALL]) == 1
+                 str(out), "--quick", "--preset", "paper", "-q", *SMALL]) == 1
     # good-paper completes; its row is "fail" for its accuracy checks alone (the paper
     # preset's spurious total internal reflection in the sphere, 2.7 % of the flux
     # against the 0.058 % bound: a physical requirement), not a failure row.

@@ -47,7 +47,7 @@ def run(tmp_path_factory):
     scene.write_text(text.replace("resolution = [512, 512]", "resolution = [48, 48]"))
     out = tmp / "out"
     code = main(["compare", str(scene), "-o", str(out), "--studies", "temporal",
-                 "--frames", str(FRAMES), "--cache-dir", str(tmp / "cache"), "-q", *SMALL])
+                 "--frames", str(FRAMES), "-q", *SMALL])
     return code, out
 
 

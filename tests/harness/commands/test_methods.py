@@ -41,7 +41,7 @@ def test_third_party_method_is_compared_by_name(tmp_path):
         [str(site), str(REPO), os.environ.get("PYTHONPATH", "")])}
     argv = [sys.executable, "-c", "from harness.cli import run; run()", "compare",
             str(_small_scene(tmp_path)), "-o", str(out), "--studies", "metrics", "-q",
-            "--cache-dir", str(tmp_path / "cache"), "--preset", "paper",
+            "--preset", "paper",
             "--method", "toy-double", *SMALL]
     done = subprocess.run(argv, check=False, env=env, cwd=tmp_path, capture_output=True,
                           text=True)

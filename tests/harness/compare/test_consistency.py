@@ -28,8 +28,7 @@ def run(tmp_path_factory):
     output folder and the terminal summary it printed."""
     tmp = tmp_path_factory.mktemp("consistency")
     out = tmp / "out"
-    argv = ["compare", str(_small_scene(tmp)), "-o", str(out), "--quick", "--cache-dir",
-            str(tmp / "cache"), "-q", *SMALL]
+    argv = ["compare", str(_small_scene(tmp)), "-o", str(out), "--quick", "-q", *SMALL]
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
         status = main(argv)

@@ -38,7 +38,7 @@ class WithNegatives:
     name = "negatives"
     description = "an independent reference with a few negative camera pixels"
 
-    def __init__(self, *, cache: str):
+    def __init__(self, *, cache: str | None):
         self.cache = cache
 
     def configure(self, scene):
@@ -60,8 +60,7 @@ def compared(tmp_path_factory):
     folder = tmp_path_factory.mktemp("negatives")
     overrides = dict(parse_override(v) for v in SMALL[1::2])
     scene = with_settings(load_scene(_small_scene(folder)), overrides)
-    options = CompareOptions(studies=("metrics",), quick=True, progress=False,
-                             cache=str(folder / "cache"))
+    options = CompareOptions(studies=("metrics",), quick=True, progress=False)
     references = render_references(scene, options)
     comparison = run_comparison(scene, WithNegatives(cache=options.cache), options=options,
                                 references=references, checks=CheckOptions())

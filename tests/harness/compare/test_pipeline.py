@@ -74,15 +74,13 @@ def test_compare_sweep_and_a_third_party_method_score_through_one_function(tmp_p
         return real(scene, geometry, render, references)
 
     monkeypatch.setattr(pipeline, "score_render", spy)
-    cache = str(tmp_path / "cache")
     assert main(["compare", str(_small_scene(tmp_path)), "-o", str(tmp_path / "out"),
-                 "--studies", "metrics", "--preset", "paper", "-q", "--cache-dir", cache,
-                 *SMALL]) == 0
+                 "--studies", "metrics", "--preset", "paper", "-q", *SMALL]) == 0
     assert len(calls) == 1
 
     paper = load_method("paper")
     scene = paper.configure(_small(tmp_path))
-    options = CompareOptions(studies=("metrics",), quick=True, progress=False, cache=cache)
+    options = CompareOptions(studies=("metrics",), quick=True, progress=False)
     references = pipeline.render_references(scene, options)
     row = score_row(scene, "paper", render_row(scene, "paper", repeats=1), *references)
     assert len(calls) == 2
@@ -148,8 +146,7 @@ def test_a_study_from_this_file_reaches_metrics_json_and_the_page(tmp_path, peak
     assert "peak" in known_studies()
     out = tmp_path / "out"
     assert main(["compare", str(_small_scene(tmp_path)), "-o", str(out), "--studies",
-                 "metrics,peak", "--preset", "strong", "-q", "--cache-dir",
-                 str(tmp_path / "cache"), *SMALL]) == 0
+                 "metrics,peak", "--preset", "strong", "-q", *SMALL]) == 0
     folder = out / "glass_sphere-strong"
     data = json.loads((folder / "metrics.json").read_text())
     ratio = data["studies"]["peak"]["values"]["peak_ratio"]

@@ -53,7 +53,7 @@ def test_a_preset_and_a_plug_in_render_through_the_protocol(tmp_path, monkeypatc
     plugin = toy()
     assert has_gl_runner(STRONG) and not has_gl_runner(plugin)
     result = api.compare(_small(tmp_path), ["strong", plugin], studies=("metrics",),
-                         quick=True, cache_dir=tmp_path / "cache", checks=False)
+                         quick=True, checks=False)
     names = [(name, in_context) for name, in_context, _ in calls]
     assert names == [("strong", True)] * 2 + [("paper", False), ("toy-double", False)] * 2
     for method in ("strong", "toy-double"):

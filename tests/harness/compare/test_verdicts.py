@@ -38,7 +38,7 @@ class FromReference:
     """A test plug-in method: a high-photon Mitsuba reference on other seeds,
     optionally scaled (``scale`` 1.02: a 2 % bias)."""
 
-    def __init__(self, *, scale: float, cache: str):
+    def __init__(self, *, scale: float, cache: str | None):
         self.scale, self.cache = scale, cache
         self.name = f"reference-x{scale:g}"
         self.description = "a 64x-photon reference on other seeds, scaled"
@@ -63,8 +63,7 @@ def verdicts(tmp_path_factory):
     folder = tmp_path_factory.mktemp("verdicts")
     overrides = {**dict(parse_override(v) for v in SMALL[1::2]), **REFERENCE}
     scene = with_settings(load_scene(_small_scene(folder)), overrides)
-    options = CompareOptions(studies=("metrics",), quick=True, progress=False,
-                             cache=str(folder / "cache"))
+    options = CompareOptions(studies=("metrics",), quick=True, progress=False)
     references = render_references(scene, options)
     # The per-seed maps reach the scoring (non-vacuity of the photon-noise terms).
     assert references.reference.receivers[0].seed_maps.shape == (4, 64, 64, 3)

@@ -43,8 +43,7 @@ def figures(tmp_path_factory):
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(common, "text_overlaps", recording_overlaps)
         patch.setattr(FigureContext, "save", recording_save)
-        code = main(["figures", "-o", str(out), "--quick", "-q",
-                     "--cache-dir", str(out / "cache")])
+        code = main(["figures", "-o", str(out), "--quick", "-q"])
     assert code == 0, CHECKED
     return out
 
@@ -141,8 +140,7 @@ def test_command_fails_on_a_figure_with_overlapping_text(tmp_path, monkeypatch, 
     first pair when a figure's texts overlap (the figure here is made to)."""
     monkeypatch.setitem(FIGURES, "figX", lambda ctx: ctx.save(
         "figX", _two_titles(gap=0.0), caption="Fig. X"))
-    code = main(["figures", "--only", "figX", "-o", str(tmp_path / "out"), "-q",
-                 "--cache-dir", str(tmp_path / "cache")])
+    code = main(["figures", "--only", "figX", "-o", str(tmp_path / "out"), "-q"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1
     assert len(err) == 1 and err[0].startswith("error: figure figX: two texts overlap: title")

@@ -331,8 +331,8 @@ def test_compare_writes_the_decomposition(tmp_path):
     the record in metrics.json with the measured noise floor (an independent
     reference), the report's section, and no other study."""
     scene, out = _small_scene(tmp_path), tmp_path / "out"
-    assert main(["compare", str(scene), "-o", str(out), "--quick", "-q", "--cache-dir",
-                 str(tmp_path / "cache"), "--studies", "metrics,decomposition", *SMALL]) == 0
+    assert main(["compare", str(scene), "-o", str(out), "--quick", "-q", "--studies",
+                 "metrics,decomposition", *SMALL]) == 0
     for preset in ("paper", "strong"):
         folder = out / f"glass_sphere-{preset}"
         with (folder / "decomposition.csv").open() as f:

@@ -57,6 +57,8 @@ def cluster_run(tmp_path_factory):
     sweep = write_sweep(folder)
     cluster = DaskCluster(folder / "cluster", {"w0": [], "w1": []})
     try:
+        # Its own cache: a sweep's cache holds its rows as well as the references, and
+        # the tests here count what the first run computed and what a rerun reads.
         out, cache = folder / "out", folder / "cache"
         start = time.perf_counter()
         code = main(["sweep", str(sweep), "-o", str(out), "--scheduler-file",

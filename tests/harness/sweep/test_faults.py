@@ -46,6 +46,7 @@ def test_failing_rows_are_recorded_and_the_sweep_goes_on(tmp_path, monkeypatch, 
                    "size = [8.0, 8.0]": "size = [1.0, 1.0]"})
     (folder / "faults.toml").write_text(SWEEP)
     monkeypatch.setattr(run_module, "render_row", failing_render)
+    # Its own cache: the failing rows must not reach the results cache, checked below.
     out, cache = tmp_path / "out", tmp_path / "cache"
     code = main(["sweep", str(folder / "faults.toml"), "-o", str(out), "--in-process",
                  "--cache-dir", str(cache), "-q"])
