@@ -1,5 +1,7 @@
 """One number per question, on a real ``caustics compare`` output (both presets, a small
-glass sphere): every written copy of a quantity agrees with its ``metrics.json`` record,
+glass sphere): what the run writes (report, tables, speedups, claims; a second run
+reads both references from the cache), every written copy of a quantity agrees with
+its ``metrics.json`` record,
 every method of the scene is scored over the same pixels, and a copy that drifts is
 named (:mod:`harness.compare.consistency`). Kind: regression lock (it guards the
 pipeline's plumbing, not accuracy)."""
@@ -17,6 +19,7 @@ import pytest
 from harness.cli import main
 from harness.commands.compare import excess_cell
 from harness.compare.consistency import disagreements
+from harness.studies.pareto import equal_error_speedup
 from reports.build import page_number
 from reports.records import MetricValue
 from tests.harness.commands.test_compare import SMALL, _small_scene
@@ -43,6 +46,81 @@ def _copy(run, tmp_path):
     target = tmp_path / "copy"
     shutil.copytree(run[1], target)
     return target
+
+
+def test_compare_writes_everything_and_reuses_the_cache(run, tmp_path):
+    """A quick compare writes the report, metrics.json (each metric beside its noise
+    floor), convergence.csv (every estimator, plain and safeguarded, iterations
+    0..4), cost_accuracy.csv (real-time and reference series, Pareto flags), records
+    the equal-error speedups (warm and cold, regression lock: each is what the CSV's
+    times of the same kind give) and the paper's claims; a second run takes both
+    references from the cache."""
+    status, out, summary = run
+    assert status == 0
+    assert "glass_sphere" in summary and "equal-error speedup" in summary
+    assert "paper" in summary and "strong" in summary
+    strong = json.loads((out / "glass_sphere-strong" / "metrics.json").read_text())
+    assert strong["method"]["name"] == "strong"
+    assert strong["provenance"]["method"]["preset"] == "strong"
+    assert strong["settings"]["splat"] == "triangles"
+    assert strong["provenance"]["reference"]["cache"] == "hit"    # shared with paper
+    index = (out / "index.html").read_text()
+    assert index.index("glass_sphere-paper/") < index.index("glass_sphere-strong/")
+    folder = out / "glass_sphere-paper"
+    assert (out / "index.html").is_file() and (folder / "index.html").is_file()
+    data = json.loads((folder / "metrics.json").read_text())
+    relmse = [m for m in data["metrics"] if (m["view"], m["region"], m["metric"])
+              == ("receiver0", "caustic", "relmse")]
+    assert len(relmse) == 1 and relmse[0]["value"] > 0 and relmse[0]["noise_floor"] > 0
+    assert {m["view"] for m in data["metrics"]} == {"camera", "receiver0"}
+    # The object seen through is a camera region of its own, scored.
+    assert {m["region"] for m in data["metrics"] if m["view"] == "camera"} == {
+        "full", "object", "object_masked"}
+    assert len(data["claims"]) == 2
+    assert all(text.startswith(("holds", "does not hold", "undecided at this noise",
+                                "not measured"))
+               for text in data["claims"].values())
+    assert "caustic_map" in data["provenance"]["method"]["passes"]
+    assert data["provenance"]["reference"]["event_chains"]
+    for name in data["files"].values():
+        assert (folder / name).is_file(), name
+    for name in ("convergence.pdf", "cost_accuracy.pdf"):
+        assert (folder / name).read_bytes().startswith(b"%PDF"), name
+    with (folder / "convergence.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    keys = {(r["estimator"], r["safeguarded"], int(r["iteration"])) for r in rows}
+    assert keys == {(e, s, k) for e in ("modified", "newton", "secant")
+                    for s in ("False", "True") for k in range(5)}
+    with (folder / "cost_accuracy.csv").open() as f:
+        cost = list(csv.DictReader(f))
+    assert {r["series"] for r in cost} == {"caustics_mapping", "reference"}
+    assert any(r["pareto"] == "True" for r in cost)
+    # Both speedups are the ones the CSV's own times and excess errors give (the
+    # reference's curve fitted on warm times; cold adds its build and compile seconds,
+    # against the method's cold time; the scene-settings row is the method's point).
+    speedups = data["equal_error_speedup"]
+    base = next(r for r in cost if r["label"] == "scene settings")
+    reference = [r for r in cost if r["series"] == "reference"]
+    one_off = speedups["reference"]["build_s"] + speedups["reference"]["compile_s"]
+    for kind in ("warm", "cold"):
+        expected = equal_error_speedup(
+            float(base[f"time_{kind}_s"]), float(base["excess"]),
+            [float(r["time_warm_s"]) for r in reference],
+            [float(r["excess"]) for r in reference],
+            reference_stderrs=[float(r["excess_stderr"]) for r in reference],
+            method_stderr=float(base["excess_stderr"]),
+            overhead_s=one_off if kind == "cold" else 0.0)
+        got = speedups[kind]
+        assert got["kind"] == expected.kind, kind
+        assert (got["speedup"], got["reference_time"]) == pytest.approx(
+            (expected.speedup, expected.reference_time), rel=1e-9), kind
+    assert set(speedups["method"]) == set(speedups["reference"]) == {"build_s", "compile_s"}
+    again_out = tmp_path / "again"
+    assert main(["compare", str(_small_scene(tmp_path)), "-o", str(again_out), "-q", *SMALL,
+                 "--studies", "metrics", "--preset", "paper"]) == 0
+    again = json.loads((again_out / "glass_sphere-paper" / "metrics.json").read_text())
+    assert again["provenance"]["reference"]["cache"] == "hit"
+    assert again["provenance"]["independent_reference"]["cache"] == "hit"
 
 
 def test_every_copy_agrees_and_every_method_scores_the_same_pixels(run):

@@ -36,7 +36,8 @@ PERFECT_FACTOR = 64
 
 class FromReference:
     """A test plug-in method: a high-photon Mitsuba reference on other seeds,
-    optionally scaled (``scale`` 1.02: a 2 % bias)."""
+    optionally scaled (``scale`` 1.02: a 2 % bias); its camera image is Mitsuba's
+    ptracer's (only receiver 0 is judged here)."""
 
     def __init__(self, *, scale: float, cache: str | None):
         self.scale, self.cache = scale, cache
@@ -50,7 +51,9 @@ class FromReference:
         s = scene.settings
         high = with_settings(scene, {"photons": s.photons * PERFECT_FACTOR,
                                      "seed": s.seed + 100 * s.seeds})
-        result = render_reference(high, cache=self.cache, progress=False)
+        # Mitsuba's ptracer for its camera: the verdicts here are receiver 0's (the
+        # camera tracer's lookup maps would scale with the 64x photons).
+        result = render_reference(high, cache=self.cache, progress=False, camera="ptracer")
         return dataclasses.replace(result, receivers=tuple(
             dataclasses.replace(r, irradiance=r.irradiance * self.scale, variance=None,
                                 seed_maps=None)
