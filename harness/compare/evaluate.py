@@ -132,17 +132,17 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
         The metric values, and ``{"<view>/signed", "<view>/ssim", "<view>/flip"}``
         maps over the full image (float32; SSIM and FLIP rounded to half precision).
     """
+    # SSIM and FLIP maps made once for every region (a region's value is its map's mean
+    # over the mask, as score_value computes it): the method's, and the noise floor's.
     ssim_map, flip_map = _perceptual_maps(method, reference, exposure)
-    # The noise floor's SSIM and FLIP maps, made once for every region (a region's
-    # value is its map's mean over the mask, as score_value computes it).
+    maps = {"ssim": ssim_map, "flip": flip_map}
     floor_maps = {}
     if independent is not None:
         try:
-            floor_maps = dict(zip(("ssim", "flip"),
-                                  _perceptual_maps(independent, reference, exposure),
+            floor_maps = dict(zip(maps, _perceptual_maps(independent, reference, exposure),
                                   strict=True))
         except MetricInputError:
-            floor_maps = {}
+            pass  # score_value's NaN, region by region
     inputs = None
     if variance is not None and seeds is not None and seeds >= 2:
         inputs = ExcessInputs(np.asarray(variance), int(seeds), channel_correlation,
@@ -155,8 +155,8 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
         if not mask.any():
             continue
         for metric in METRICS:
-            if metric in ("ssim", "flip"):
-                value = float((ssim_map if metric == "ssim" else flip_map)[mask].mean())
+            if metric in maps:
+                value = float(maps[metric][mask].mean())
             else:
                 value = score_value(metric, method, reference, mask=mask, exposure=exposure)
             floor = None
@@ -165,8 +165,7 @@ def score_view(view: str, method, reference, independent, *, regions: dict[str, 
             elif independent is not None:
                 floor = score_value(metric, independent, reference, mask=mask,
                                     exposure=exposure)
-            excess = metric_excess(metric, method, reference, mask, inputs,
-                                   maps={"ssim": ssim_map, "flip": flip_map})
+            excess = metric_excess(metric, method, reference, mask, inputs, maps=maps)
             values.append(MetricValue(view, region, metric, value, floor, **excess,
                                       pixels=int(mask.sum())))
     caustic = regions.get("caustic")
