@@ -4,7 +4,8 @@
 to_table(x))`` gives ``x`` again for every scene dataclass (tuples become arrays, a
 tagged-union member gets its ``type`` key, ``None`` fields are left out because TOML has
 no null and ``None`` is every optional field's default). The importers write scene files
-with it, and the glTF export stores each shape's exact table in its node's extras.
+with it, and the glTF and Mitsuba XML exports store each shape's exact table in the
+file (:func:`portable_table`: without this machine's paths).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import Any
 
 from scenes.schema import tag_of
 
-__all__ = ["to_table"]
+__all__ = ["portable_table", "to_table"]
 
 
 def to_table(value: Any) -> Any:
@@ -36,3 +37,14 @@ def to_table(value: Any) -> Any:
     if isinstance(value, tuple | list):
         return [to_table(item) for item in value]
     return value
+
+
+def portable_table(table: Any) -> Any:
+    """A shape's table without the paths of the files it names (they are this machine's;
+    an export carries the triangles themselves): a ``builtin:`` mesh keeps its name."""
+    if isinstance(table, dict):
+        return {k: portable_table(v) for k, v in table.items()
+                if not (k == "file" and not str(v).startswith("builtin:"))}
+    if isinstance(table, list):
+        return [portable_table(item) for item in table]
+    return table

@@ -34,6 +34,14 @@ hypothesis_settings.register_profile("ci", derandomize=True, print_blob=True)
 if os.environ.get("CI"):
     hypothesis_settings.load_profile("ci")
 SCENES = REPO / "scenes"
+#: Every bundled scene file: the paper scenes, the hard cases and their sub-folders (not
+#: the sweeps' scenes).
+BUNDLED_FILES = tuple(sorted(p for p in SCENES.rglob("*.toml") if "sweeps" not in p.parts))
+
+
+def bundled_id(path: Path) -> str:
+    """A bundled scene file's test id: ``glass_sphere``, ``hard/concave/bowl_deep_sun30``."""
+    return path.relative_to(SCENES).with_suffix("").as_posix()
 
 MINIMAL_SCENE = """
 [scene]

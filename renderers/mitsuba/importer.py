@@ -12,6 +12,12 @@ resolve as Mitsuba resolves them; the loaded scene is then traversed.
   mesh facing up everywhere a mesh receiver, other diffuse shapes occluders;
 * emitters: ``point``, ``spot``, ``directional`` (Mitsuba's units are the harness's:
   W/sr, W/m²); the ``perspective`` sensor (``--camera``: its id).
+
+A file the harness exported carries the scene's exact tables in a comment
+(:mod:`.exact_tables`): each shape, the light and the camera take theirs where the loaded
+part still agrees with it, so an export imports back as the same scene (an open water
+surface, which the triangles alone cannot be, included); a part edited since is read
+from the file.
 """
 
 from __future__ import annotations
@@ -22,7 +28,14 @@ from pathlib import Path
 import numpy as np
 
 from renderers.mitsuba import _mi
-from scenes.importers.draft import Draft, ImportProblemError, MeshPart, Part
+from renderers.mitsuba.exact_tables import (
+    camera_agrees,
+    light_agrees,
+    material_agrees,
+    read_tables,
+    shape_table,
+)
+from scenes.importers.draft import Draft, ImportProblemError, MeshPart, Part, usable
 from scenes.importers.shapes import (
     icosphere,
     is_closed,
@@ -152,8 +165,7 @@ def _shape(mi, draft: Draft, approx: bool, shape, index: int) -> None:
         positions = (corners @ matrix.T)[:, :3]
         faces = np.array([[0, 1, 2], [0, 2, 3]])
     elif kind in _MESHES or shape.is_mesh():
-        positions = _array(params["vertex_positions"]).reshape(-1, 3)
-        faces = np.asarray(np.array(params["faces"]), np.int64).reshape(-1, 3)
+        positions, faces = _triangles(params)
     else:
         draft.refuse(where, f"a {kind} shape: the importer reads meshes (obj, ply, "
                      "serialized), sphere and rectangle", part="shape")
@@ -162,12 +174,7 @@ def _shape(mi, draft: Draft, approx: bool, shape, index: int) -> None:
     if problem:
         draft.refuse(where, f"the mesh {problem}", part="shape")
         return
-    normals = None
-    if "vertex_normals" in params and kind != "Rectangle":
-        normals = _array(params["vertex_normals"]).reshape(-1, 3)
-        normals = normals if len(normals) == len(positions) else None
-    name = f"{len(draft.receivers) + len(draft.objects)}_{shape.id() or 'shape'}"
-    mesh = MeshPart(name, positions, faces, normals)
+    mesh = _mesh_part(draft, shape, params, positions, faces, normals=kind != "Rectangle")
     if material["type"] == "diffuse":
         plane = rectangle(positions, faces)
         if plane is not None:
@@ -190,6 +197,79 @@ def _shape(mi, draft: Draft, approx: bool, shape, index: int) -> None:
                      "dielectric must close a volume", part="shape")
         return
     draft.objects.append(Part({"type": "mesh", "material": material}, origin, mesh))
+
+
+def _triangles(params) -> tuple[np.ndarray, np.ndarray]:
+    """A mesh's world-space positions (n, 3), m, and faces (m, 3)."""
+    return (_array(params["vertex_positions"]).reshape(-1, 3),
+            np.asarray(np.array(params["faces"]), np.int64).reshape(-1, 3))
+
+
+def _mesh_part(draft: Draft, shape, params, positions, faces, *, normals: bool) -> MeshPart:
+    """The triangles as a mesh file to write, with the file's vertex normals if any."""
+    found = None
+    if normals and "vertex_normals" in params:
+        found = _array(params["vertex_normals"]).reshape(-1, 3)
+        found = found if len(found) == len(positions) else None
+    name = f"{len(draft.receivers) + len(draft.objects)}_{shape.id() or 'shape'}"
+    return MeshPart(name, positions, faces, found)
+
+
+def _exact_shape(mi, draft: Draft, approx: bool, shape, index: int, *, tables: dict
+                 ) -> bool:
+    """An exported shape from the comment's table, where its role and material agree
+    with what Mitsuba loaded; False where they do not (the caller reads the file)."""
+    role, table = shape_table(tables, shape.id()) or (None, None)
+    if role is None or shape.emitter() is not None:
+        return False
+    where = _where("shape", shape, index)
+    scratch = Draft(source=draft.source, name=draft.name)
+    read = _material(mi, shape.bsdf(), where, scratch, False)
+    if not material_agrees(role, table, read, channel=tables.get("channel"),
+                           bsdf=tables.get("bsdf", "stock")) or not (
+                               usable(table) or shape.is_mesh()):
+        return False
+    # The file's own reading, kept in reserve for a table that turns out not to
+    # reproduce the triangles (its problems with it: an open water surface is refused).
+    marks = (len(draft.problems), len(draft.approximations), len(draft.receivers),
+             len(draft.objects), set(draft.explained))
+    _shape(mi, draft, approx, shape, index)
+    refused = tuple(draft.problems[marks[0]:])
+    read_parts = ([("receivers", p) for p in draft.receivers[marks[2]:]]
+                  + [("objects", p) for p in draft.objects[marks[3]:]])
+    del draft.problems[marks[0]:], draft.approximations[marks[1]:]
+    del draft.receivers[marks[2]:], draft.objects[marks[3]:]
+    draft.explained = marks[4]
+    section = f"{role}s"
+    box = shape.bbox()
+    bounds = np.stack([_array(box.min).ravel(), _array(box.max).ravel()])
+    origin = f"Mitsuba {where} (exact {table.get('type')} from the file's harness comment)"
+    if usable(table):
+        getattr(draft, section).append(Part(table, origin, fallback=(read_parts or [None])[0],
+                                            refused=refused, bounds=bounds))
+        return True
+    # The harness's own mesh, whose file the export could not name: the file's
+    # triangles, in the role and with the material the table gives.
+    if refused:
+        draft.problems.extend(refused)
+        return True
+    params = mi.traverse(shape)
+    positions, faces = _triangles(params)
+    mesh = _mesh_part(draft, shape, params, positions, faces, normals=True)
+    keys = ("albedo",) if role == "receiver" else ("material",)
+    getattr(draft, section).append(Part({"type": "mesh", **{k: table[k] for k in keys}},
+                                        f"Mitsuba {where} (the harness's mesh {role}, its "
+                                        "triangles)", mesh))
+    return True
+
+
+def _exact_light(draft: Draft, tables: dict, first: int) -> None:
+    """The comment's light in place of the one just read, where they agree."""
+    exact = tables.get("light")
+    for k, part in enumerate(draft.lights[first:], start=first):
+        if isinstance(exact, dict) and light_agrees(exact, part.table):
+            draft.lights[k] = Part(exact, part.origin + "; exact values from the file's "
+                                   "harness comment")
 
 
 def _emitter(mi, draft: Draft, approx: bool, emitter, index: int) -> None:
@@ -281,13 +361,24 @@ def read_mitsuba(path: str | Path, *, approximate: bool = False, camera: str | N
     except Exception as error:  # Mitsuba raises RuntimeError and others on bad input
         first = (str(error).strip().splitlines() or [type(error).__name__])[0]
         raise ImportProblemError([f"{path}: Mitsuba cannot load it: {first}"]) from None
-    draft = Draft(source=str(path), name=path.stem)
+    tables = read_tables(path)
+    draft = Draft(source=str(path), name=str(tables.get("name") or path.stem),
+                  info=dict(tables.get("scene") or {}),
+                  settings=dict(tables.get("settings") or {}))
     for index, shape in sorted(enumerate(scene.shapes()), key=_file_order):
-        _shape(mi, draft, approximate, shape, index)
+        if not _exact_shape(mi, draft, approximate, shape, index, tables=tables):
+            _shape(mi, draft, approximate, shape, index)
     for index, emitter in enumerate(scene.emitters()):
+        first = len(draft.lights)
         _emitter(mi, draft, approximate, emitter, index)
+        _exact_light(draft, tables, first)
     box = scene.bbox()
     centre = (_array(box.min).ravel() + _array(box.max).ravel()) / 2
     _sensor(mi, draft, list(scene.sensors()), camera, centre)
+    exact = tables.get("camera")
+    if draft.camera is not None and isinstance(exact, dict) and camera_agrees(
+            exact, draft.camera.table):
+        draft.camera = Part(exact, draft.camera.origin + "; exact values from the file's "
+                            "harness comment")
     draft.choose_light(approximate)
     return draft

@@ -24,6 +24,12 @@ no second mapping.
   Otherwise one file, ``scene.xml``.
 * The sensor is the scene camera, the integrator a plain ``ptracer``; units are the
   reference's (W/sr, W/m^2, radiance W m^-2 sr^-1).
+* The scene's exact tables (its ``[scene]``, ``[settings]``, light, camera, receivers
+  and objects, without this machine's file paths) are a comment at the top of each file
+  (:data:`TABLES_MARK`, then JSON), as the glTF export keeps them in its extras: Mitsuba
+  ignores it; ``caustics import`` takes them where the file's shapes, BSDFs, emitter and
+  sensor still agree with them, so that an export imports back as the same scene (a
+  water surface's waves, the IORs of every dispersion channel, the renderer settings).
 
 Mitsuba's parser does not know a Python plugin's object type, so for ``bsdf="harness"``
 the writer is handed a stock ``dielectric`` in its place and the plugin's name is put
@@ -33,6 +39,7 @@ property, which only ``chain_dielectric`` has).
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from xml.etree import ElementTree
 
@@ -42,8 +49,10 @@ from renderers.mitsuba.exporter import ExportedScene, exported, mitsuba_mesh, sc
 from scenes import effects_of
 from scenes.geometry import build_geometry
 from scenes.model import DielectricMaterial, Scene
+from scenes.tables import portable_table, to_table
 
-__all__ = ["BSDFS", "CHANNEL_FILES", "load_scene_xml", "stock_differences", "write_scene_xml"]
+__all__ = ["BSDFS", "CHANNEL_FILES", "TABLES_MARK", "load_scene_xml", "stock_differences",
+           "write_scene_xml"]
 
 #: The files of a dispersion scene's channel passes (0, 1, 2 = red, green, blue).
 CHANNEL_FILES = {None: "scene.xml", 0: "scene_r.xml", 1: "scene_g.xml", 2: "scene_b.xml"}
@@ -52,6 +61,8 @@ _STAND_IN = "dielectric"
 BSDFS = ("stock", "harness")
 #: Top-level XML elements that are scene objects (``<default>`` is a parameter).
 _OBJECTS = {"shape", "emitter", "sensor", "integrator"}
+#: The first line of the comment that holds the scene's exact tables (JSON follows).
+TABLES_MARK = "caustics-harness scene tables, version 1"
 
 
 def _stand_in(value, *, stock: bool):
@@ -94,7 +105,29 @@ def stock_differences(scene: Scene) -> tuple[str, ...]:
     return tuple(lines)
 
 
-def _write(mi, variant: str, desc: dict, path: Path, *, stock: bool) -> None:
+def _tables(scene: Scene, *, channel: int | None, bsdf: str) -> dict:
+    """What the comment holds: the scene's tables (scene coordinates, SI units), which
+    channel pass this file is, and how its dielectrics are written."""
+    return {
+        "name": scene.name, "scene": to_table(scene.info),
+        "settings": to_table(scene.settings), "light": to_table(scene.light),
+        "camera": to_table(scene.camera),
+        "receivers": [portable_table(to_table(r)) for r in scene.receivers],
+        "objects": [portable_table(to_table(o)) for o in scene.objects],
+        "channel": channel, "bsdf": bsdf,
+        "stock_differences": list(stock_differences(scene)) if bsdf == "stock" else [],
+    }
+
+
+def _comment(tables: dict) -> ElementTree.Element:
+    # An XML comment may not hold "--"; JSON has it only inside strings, where the
+    # escape \u002d reads back as the same "-".
+    lines = ",\n".join(f"{json.dumps(k)}: {json.dumps(v)}" for k, v in tables.items())
+    text = ("{\n" + lines + "\n}").replace("--", "-\\u002d")
+    return ElementTree.Comment(f" {TABLES_MARK}\n{text}\n")
+
+
+def _write(mi, variant: str, desc: dict, path: Path, *, stock: bool, tables: dict) -> None:
     config = mi.parser.ParserConfig(variant)
     state = mi.parser.parse_dict(config, _stand_in(desc, stock=stock))
     for node in state.nodes:
@@ -110,6 +143,9 @@ def _write(mi, variant: str, desc: dict, path: Path, *, stock: bool) -> None:
     for element in tree.getroot():
         if element.tag in _OBJECTS and element.get("name") is not None:
             element.set("id", element.get("name"))
+    comment = _comment(tables)
+    comment.tail = "\n\n    "
+    tree.getroot().insert(0, comment)
     tree.write(path, encoding="unicode")
 
 
@@ -146,7 +182,8 @@ def write_scene_xml(scene: Scene, folder: str | Path, *, bsdf: str = "stock"
     for channel in channels:
         desc = scene_dict(scene, geometry=geometry, channel=channel, shape=ply)
         path = folder / CHANNEL_FILES[channel]
-        _write(mi, variant, desc, path, stock=bsdf == "stock")
+        _write(mi, variant, desc, path, stock=bsdf == "stock",
+               tables=_tables(scene, channel=channel, bsdf=bsdf))
         written.append(path)
     return tuple(written)
 

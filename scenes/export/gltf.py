@@ -63,7 +63,7 @@ from scenes.model import (
     Scene,
     SpotLight,
 )
-from scenes.tables import to_table
+from scenes.tables import portable_table, to_table
 
 __all__ = ["HARD_EDGE", "UNITS", "GltfExport", "export_gltf"]
 
@@ -344,15 +344,6 @@ def _normalised_uvs(mesh: TriangleMesh, extent) -> np.ndarray:
     return np.stack([(uv[:, 0] - umin) / (umax - umin), (uv[:, 1] - vmin) / (vmax - vmin)], 1)
 
 
-def _portable(table):
-    """A shape's scene table without the paths of the files it names (they are this
-    machine's; the triangles are in the file): a ``builtin:`` mesh keeps its name."""
-    if isinstance(table, dict):
-        return {k: _portable(v) for k, v in table.items()
-                if not (k == "file" and not str(v).startswith("builtin:"))}
-    return table
-
-
 def _asset_extras(scene: Scene, tolerance: float, given: bool, receivers, objects) -> dict:
     return {"harness": {
         "scene": scene.name,
@@ -411,7 +402,7 @@ def export_gltf(scene: Scene, path: str | Path, *, tolerance: float | None = Non
                                                   thickness=0.0, double_sided=False))
         extras = {"harness": {"role": "receiver", "index": i, "kind": rec.kind,
                               "tessellation": vars(receivers[i]),
-                              "table": _portable(to_table(rec))}}
+                              "table": portable_table(to_table(rec))}}
         roots.append(_mesh_node(gltf, buffer, built.mesh, name=f"receiver_{i}",
                                 material=material, uvs=_normalised_uvs(built.mesh, built.extent),
                                 extras=extras))
@@ -426,7 +417,7 @@ def export_gltf(scene: Scene, path: str | Path, *, tolerance: float | None = Non
                                                   double_sided=not mesh.closed))
         extras = {"harness": {"role": "object", "index": i, "kind": obj.kind,
                               "closed": bool(mesh.closed), "tessellation": vars(objects[i]),
-                              "table": _portable(to_table(obj))}}
+                              "table": portable_table(to_table(obj))}}
         roots.append(_mesh_node(gltf, buffer, mesh, name=f"object_{i}", material=material,
                                 uvs=None, extras=extras))
     roots.append(_light(gltf, buffer, scene.light))

@@ -24,7 +24,7 @@ from scenes.geometry import build_geometry
 from scenes.loader import load_scene
 from scenes.model import Scene
 
-__all__ = ["Draft", "ImportProblemError", "MeshPart", "Part", "write_draft"]
+__all__ = ["Draft", "ImportProblemError", "MeshPart", "Part", "usable", "write_draft"]
 
 
 class ImportProblemError(HarnessError, ValueError):
@@ -62,6 +62,9 @@ class Part:
     fallback: tuple[str, Part] | None = None
     #: The file's triangles' bounding box (2, 3), m, that the exact table must reproduce.
     bounds: np.ndarray | None = None
+    #: Why the triangles alone could not be imported (an open water surface is only its
+    #: exact table): the problems raised if the table turns out stale.
+    refused: tuple[str, ...] = ()
 
 
 @dataclass
@@ -149,6 +152,16 @@ class Draft:
             raise ImportProblemError(self.problems)
 
 
+def usable(table: dict) -> bool:
+    """An exported shape's exact table names every file it needs (an export drops this
+    machine's paths: such a shape is rebuilt from the file's triangles)."""
+    if table.get("type") == "mesh" and "file" not in table:
+        return False
+    height = table.get("height")
+    return not (isinstance(height, dict) and height.get("type") == "file"
+                and "file" not in height)
+
+
 def _short(values) -> str:
     return "(" + ", ".join(f"{v:.4g}" for v in values) + ")"
 
@@ -207,6 +220,9 @@ def write_draft(draft: Draft, path: str | Path) -> Scene:
         return scene
     # An exact table that no longer describes the file's triangles (the node was edited
     # after the export): write those parts from their triangles instead.
+    lost = [line for part in stale if part.fallback is None for line in part.refused]
+    if lost:
+        raise ImportProblemError(lost)
     for part in stale:
         section, replacement = part.fallback
         for name in ("receivers", "objects"):
@@ -218,12 +234,13 @@ def write_draft(draft: Draft, path: str | Path) -> Scene:
 
 def _stale(draft: Draft, scene: Scene) -> list[Part]:
     """Parts from exact tables whose built triangles' bounding box differs from the
-    file's by more than 1e-3 of its diagonal."""
+    file's by more than 1e-3 of its diagonal (those with a fallback to write instead, or
+    whose triangles alone were refused)."""
     geometry = build_geometry(scene)
     built = [g.mesh for g in geometry.receivers] + [g.mesh for g in geometry.objects]
     stale = []
     for part, mesh in zip(draft.receivers + draft.objects, built, strict=True):
-        if part.fallback is None or part.bounds is None:
+        if part.bounds is None or (part.fallback is None and not part.refused):
             continue
         positions = np.asarray(mesh.positions, np.float64)
         box = np.stack([positions.min(axis=0), positions.max(axis=0)])

@@ -32,7 +32,7 @@ import pygltflib as gl
 from scipy.spatial.transform import Rotation
 
 from scenes.export.frames import GLTF_FROM_SCENE
-from scenes.importers.draft import Draft, ImportProblemError, MeshPart, Part
+from scenes.importers.draft import Draft, ImportProblemError, MeshPart, Part, usable
 from scenes.importers.shapes import (
     icosphere,
     is_closed,
@@ -163,15 +163,6 @@ def _agrees(table_point, node_point) -> bool:
     return bool(np.linalg.norm(a - b) <= 1e-6 * max(1.0, np.linalg.norm(a)))
 
 
-def _usable(table: dict) -> bool:
-    """A scene table names every file it needs (the export drops a machine's paths)."""
-    if table.get("type") == "mesh" and "file" not in table:
-        return False
-    height = table.get("height")
-    return not (isinstance(height, dict) and height.get("type") == "file"
-                and "file" not in height)
-
-
 @dataclass(frozen=True)
 class _Triangles:
     """A mesh node's primitives joined, in scene coordinates: positions (n, 3) m, faces
@@ -242,14 +233,15 @@ class _Reader:
             draft.refuse(where, f"the mesh {problem}", part="shape")
             return
         role, table = harness.get("role"), harness.get("table")
-        if role in {"receiver", "object"} and isinstance(table, dict) and _usable(table):
+        if role in {"receiver", "object"} and isinstance(table, dict) and usable(table):
             # The triangles' reading is kept in reserve (and its problems forgotten): it
             # is written only if the table does not reproduce the triangles.
             marks = len(draft.problems), len(draft.approximations)
             fallback = self.shape(label, tri)
+            refused = tuple(draft.problems[marks[0]:])
             del draft.problems[marks[0]:], draft.approximations[marks[1]:]
             part = Part(table, f"glTF node {label} (exact {harness.get('kind')} from extras)",
-                        fallback=fallback,
+                        fallback=fallback, refused=refused,
                         bounds=np.stack([tri.positions.min(axis=0), tri.positions.max(axis=0)]))
             (draft.receivers if role == "receiver" else draft.objects).append(part)
             return

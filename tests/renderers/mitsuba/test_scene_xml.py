@@ -31,8 +31,9 @@ from renderers.mitsuba.scene_xml import (
     write_scene_xml,
 )
 from renderers.results import ReceiverMap
-from scenes import bundled_scene_names, load_scene, resolve_scene
+from scenes import load_scene, resolve_scene
 from scenes.geometry import build_geometry
+from tests.conftest import BUNDLED_FILES, bundled_id
 
 #: |z| of a flux ratio that passes: each fails with probability 6e-5 under the normal
 #: approximation, so the family of one comparison (total, 7 encircled, the regions: a
@@ -180,14 +181,14 @@ def test_stock_xml_loads_in_a_mitsuba_that_knows_nothing_of_the_harness(tmp_path
     process that imports only Mitsuba (no plugin registered). Not vacuous: the
     ``harness`` file of the same scene fails to load there, naming the plugin."""
     paths = []
-    for name in bundled_scene_names():
-        paths += write_scene_xml(load_scene(resolve_scene(name)), tmp_path / name)
+    for file in BUNDLED_FILES:
+        paths += write_scene_xml(load_scene(file), tmp_path / bundled_id(file))
     env = {**os.environ, "DRJIT_LIBLLVM_PATH": configure_drjit()}
     done = subprocess.run([sys.executable, "-c", _PLAIN_MITSUBA, *map(str, paths)],
                           capture_output=True, text=True, env=env, cwd=tmp_path, check=False)
     assert done.returncode == 0, done.stderr[-2000:]
     rendered = {line.split(" ")[0]: line.split(" ")[1:] for line in done.stdout.splitlines()}
-    assert list(rendered) == list(map(str, paths)) and len(paths) >= len(bundled_scene_names())
+    assert list(rendered) == list(map(str, paths)) and len(paths) >= len(BUNDLED_FILES)
     assert all(finite == "True" and float(peak) >= 0 for finite, peak in rendered.values())
     # Lit where the camera sees a diffuse surface directly (the ptracer renders what it
     # sees only through specular surfaces black: seabed's and water_pool's floor).

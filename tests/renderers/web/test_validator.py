@@ -16,11 +16,9 @@ import pytest
 from renderers.web.validator import ValidatorError, unavailable_reason, validate_gltf
 from scenes import load_scene
 from scenes.export import export_gltf
-from tests.conftest import SCENES
+from tests.conftest import BUNDLED_FILES as BUNDLED
+from tests.conftest import bundled_id
 from tests.scenes.export.scenes import area_light_scene
-
-#: Every bundled scene (paper scenes, hard cases and their sub-folders; not sweeps).
-BUNDLED = sorted(p for p in SCENES.rglob("*.toml") if "sweeps" not in p.parts)
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +31,7 @@ def validator():
 
 
 @pytest.mark.usefixtures("validator")
-@pytest.mark.parametrize("path", BUNDLED, ids=lambda p: str(p.relative_to(SCENES)))
+@pytest.mark.parametrize("path", BUNDLED, ids=bundled_id)
 def test_every_bundled_scene_exports_valid_gltf(tmp_path, path):
     done = export_gltf(load_scene(path), tmp_path / "scene.glb")
     report = validate_gltf(done.path)

@@ -9,11 +9,12 @@ import pygltflib as gl
 import pytest
 
 from renderers.mitsuba.cache import cache_key
-from scenes.bundled import bundled_scene_names, resolve_scene
+from scenes.bundled import resolve_scene
 from scenes.export import export_gltf
 from scenes.geometry import build_geometry
 from scenes.importers import read_gltf, write_draft
 from scenes.loader import load_scene
+from tests.conftest import BUNDLED_FILES, bundled_id
 from tests.scenes.importers.geometry import largest_vertex_gap
 
 
@@ -22,11 +23,11 @@ def _has_mesh_file(scene) -> bool:
                for part in (*scene.receivers, *scene.objects))
 
 
-@pytest.mark.parametrize("name", bundled_scene_names())
-def test_round_trip_gives_the_same_scene(name, tmp_path):
+@pytest.mark.parametrize("file", BUNDLED_FILES, ids=bundled_id)
+def test_round_trip_gives_the_same_scene(file, tmp_path):
     """Regression lock: export then import reproduces the scene (the same cache key), or
     where the scene names mesh files, the same triangles to float32 precision."""
-    scene = load_scene(resolve_scene(name))
+    scene = load_scene(file)
     export_gltf(scene, tmp_path / "scene.glb")
     back = write_draft(read_gltf(tmp_path / "scene.glb"), tmp_path / "back.toml")
     if not _has_mesh_file(scene):
