@@ -57,8 +57,11 @@ uniform sampler2D u_receiver_normals;
 uniform int u_positions_size;
 uniform sampler2D u_front_positions;      // object atlas, RGBA32F xyz, w object + 1
 uniform sampler2D u_front_normals;
+uniform sampler2D u_front_geometric;      // object atlas: the triangles' geometric normals
 uniform sampler2D u_back_positions;      // object atlas at u_back_size texels per view
 uniform sampler2D u_back_normals;
+uniform sampler2D u_back_geometric;
+uniform int u_shading_correction;         // 1: Veach's adjoint shading-normal factor
 uniform int u_grid;
 uniform int u_front_stride;     // front-atlas texels per grid step (odd)
 uniform int u_patches;          // 1: the records are rim patches (see the header)
@@ -219,6 +222,29 @@ bool back_at(vec3 x, int object, out vec3 p, out vec3 n) {
                  (ndc * 0.5 + 0.5) * float(u_back_size), u_filtered == 1, q, n);
     p = q.xyz;
     return abs(q.w - float(object + 1)) < 0.5;
+}
+
+// Veach's adjoint shading-normal factor (1997, Sec. 5.3) of a specular event that turns
+// d into d2 at shading normal n and geometric normal ng,
+//     |d . n| |d2 . ng| / (|d . ng| |d2 . n|),
+// which the reference's photons carry so that light and camera tracing agree on meshes
+// whose stored normals are interpolated (1 where n = ng); 0 for a direction in either
+// tangent plane, as the reference drops it. Without u_shading_correction, or where the
+// texel holds no geometric normal: 1 (flux conserved at the event, the paper's model).
+float shading_factor(vec3 d, vec3 d2, vec3 n, vec3 ng) {
+    if (u_shading_correction == 0 || dot(ng, ng) == 0.0) return 1.0;
+    float den = abs(dot(d, ng)) * abs(dot(d2, n));
+    return den > 0.0 ? abs(dot(d, n)) * abs(dot(d2, ng)) / den : 0.0;
+}
+
+// The geometric normal of the exit surface at x's projection (nearest texel).
+vec3 back_geometric_at(vec3 x) {
+    int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
+    vec2 ndc;
+    if (!project(u_obj_vp[face], x, ndc)) return vec3(0.0);
+    ivec2 t = clamp(ivec2((ndc * 0.5 + 0.5) * float(u_back_size)), ivec2(0),
+                    ivec2(u_back_size - 1));
+    return texelFetch(u_back_geometric, t + ivec2(face * u_back_size, 0), 0).xyz;
 }
 
 // The exit point v + d r of the ray inside a closed object, and the exit normal bn.
@@ -703,6 +729,7 @@ void main() {
         r = refract(l, n, 1.0 / ior);
         if (fresnel) flux *= fresnel_transmittance(-dot(l, n), 1.0, ior);
     }
+    if (dot(r, r) > 0.0) flux *= shading_factor(l, r, n, texelFetch(u_front_geometric, a, 0).xyz);
     if (material == 1) {
         float d;
         vec3 bn;
@@ -716,6 +743,7 @@ void main() {
         vec3 m = dot(r, bn) > 0.0 ? -bn : bn;   // exit normal facing the inside ray
         vec3 r2 = refract(r, m, ior);
         if (fresnel) flux *= fresnel_transmittance(-dot(r, m), ior, 1.0);
+        if (dot(r2, r2) > 0.0) flux *= shading_factor(r, r2, m, back_geometric_at(exit_point));
         if (dot(r2, r2) == 0.0) {
             for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
             write_record(base, exit_point, float(view), r, 0.0, exit_point, STATUS_TIR, flux,

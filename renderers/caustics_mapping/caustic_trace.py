@@ -72,6 +72,10 @@ class TraceOptions:
     contact_test : bool
         A reflected hit where the object rests on the receiver (``under_contact`` in
         ``caustic_trace.glsl``) ends as ``reentered``; on with verified hits.
+    shading_correction : bool
+        Veach's adjoint shading-normal factor at every specular event (entry, exit),
+        |d . n_s| |d' . n_g| / (|d . n_g| |d' . n_s|), as the reference's photons
+        carry it; on in the ``strong`` preset.
     """
 
     estimator: str
@@ -87,6 +91,7 @@ class TraceOptions:
     converged: float = 0.0
     reflected_search: bool = False
     contact_test: bool = False
+    shading_correction: bool = False
 
 
 #: Residual |h| (positions-map texels at the estimate) at which the safeguarded
@@ -106,7 +111,8 @@ def trace_options(settings, eps: float) -> TraceOptions:
         start_distance=settings.start_distance, verify=bool(settings.verify_hits),
         hit_tolerance=settings.hit_tolerance,
         converged=CONVERGED if settings.safeguarded else 0.0,
-        reflected_search=bool(settings.verify_hits), contact_test=bool(settings.verify_hits))
+        reflected_search=bool(settings.verify_hits), contact_test=bool(settings.verify_hits),
+        shading_correction=settings.preset == "strong")
 #: Largest number of caustic objects one render handles.
 MAX_OBJECTS = 8
 RECORD_FLOATS = 20
@@ -262,9 +268,11 @@ def run_caustic_trace(
     set_light_uniforms(program, light)
     set_object_view_uniforms(program, light)
     units = {"u_receiver_positions": positions.positions, "u_receiver_normals": positions.normals,
-             "u_front_positions": front.positions, "u_front_normals": front.normals}
+             "u_front_positions": front.positions, "u_front_normals": front.normals,
+             "u_front_geometric": front.geometric}
     if back is not None:
-        units |= {"u_back_positions": back.positions, "u_back_normals": back.normals}
+        units |= {"u_back_positions": back.positions, "u_back_normals": back.normals,
+                  "u_back_geometric": back.geometric}
     if far is not None:
         units |= {"u_far_positions": far.positions, "u_far_normals": far.normals}
     for unit, (name, tex) in enumerate(units.items()):
@@ -300,6 +308,7 @@ def run_caustic_trace(
         ("u_front_stride", front_stride), ("u_patches", int(patches is not None)),
         ("u_reflected_search", int(options.reflected_search)),
         ("u_contact_test", int(options.contact_test)),
+        ("u_shading_correction", int(options.shading_correction)),
     ):
         set_uniform(program, name, value)
     records.bind_to_storage_buffer(0)

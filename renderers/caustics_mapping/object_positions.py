@@ -28,7 +28,9 @@ class ObjectSurfaces:
 
     Attributes
     ----------
-    positions, normals : moderngl.Texture
+    positions, normals, geometric : moderngl.Texture
+        Attachments 0, 1 and 2: world positions, stored (shading) normals and the
+        triangles' geometric normals.
     covered : int
         Samples that passed the depth test (the paper's V), counted by an occlusion
         query; only set for the front surfaces.
@@ -36,12 +38,13 @@ class ObjectSurfaces:
 
     positions: moderngl.Texture
     normals: moderngl.Texture
+    geometric: moderngl.Texture
     covered: int
 
     def give_back(self, resources: ResourcePool) -> None:
         """Return the textures to the context's pool."""
-        resources.give_back(self.positions)
-        resources.give_back(self.normals)
+        for texture in (self.positions, self.normals, self.geometric):
+            resources.give_back(texture)
 
 
 def render_object_surfaces(
@@ -80,7 +83,7 @@ def render_object_surfaces(
                       "rim_patches, whose front atlas has that many texels per grid "
                       "step, or back_resolution)")
     resources = pool(ctx)
-    textures = [resources.texture((len(views) * grid, grid)) for _ in range(2)]
+    textures = [resources.texture((len(views) * grid, grid)) for _ in range(3)]
     depth = resources.depth_texture((len(views) * grid, grid))
     fbo = resources.framebuffer(textures, depth)
     program = load_program(

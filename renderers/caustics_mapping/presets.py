@@ -17,6 +17,8 @@ A setting the scene file or the command line gives always wins; a setting left a
   safeguarded secant estimator with 5 iterations (verified hits drop what has not
   converged: on glass_sphere the modified estimator leaves 17 % of the flux
   unconverged after 3 iterations and 3.2 % after 8; the secant 0.05 % after 5) and
+  Veach's adjoint shading-normal factor at every specular event, as the reference's
+  photons carry it (``caustic_trace.TraceOptions.shading_correction``), and
   triangle splats (flux / area between neighbouring hits; Ernst et al. 2005,
   webgl-water), which measured better than footprint Gaussians (caustic relMSE
   0.0009 against 0.0019 on glass_sphere), with rim patches of 3 x 3 (the quads at
