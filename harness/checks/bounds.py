@@ -55,8 +55,9 @@ __all__ = ["MEASURES", "Bound", "ChecksFileError", "Gap", "Target", "check_locks
 
 LOCK = "regression lock"
 #: What a lock's value is measured at, which differs from the comparison's own records.
-LOCK_SETTINGS = ("raw value at the golden settings against the golden reference, over its "
-                 "own caustic region (not this run's settings or reference)")
+LOCK_SETTINGS = ("at the golden settings against the golden reference, over the scene's "
+                 "caustic region from an independent reference (relMSE: the excess with "
+                 "its interval; not this run's settings or reference)")
 
 #: The measures a method target may name, each with a one-line description;
 #: :mod:`harness.checks.targets` computes them and documents each in full.
@@ -234,17 +235,28 @@ def load_gaps(path: str | Path) -> tuple[Gap, ...]:
 
 def check_locks(scene: str, metrics: list[MetricValue] | tuple[MetricValue, ...],
                 bounds: tuple[Bound, ...]) -> tuple[Check, ...]:
-    """Check every lock of ``scene`` against its metric; a missing metric fails."""
-    values = {(m.view, m.region, m.metric): m.value for m in metrics}
+    """Check every lock of ``scene`` against its metric; a missing metric fails. A
+    metric with an excess (relMSE) is locked on the excess and judged from its 95 %
+    interval (:func:`judge`: holds, fails or undecided); the others on the value."""
+    records = {(m.view, m.region, m.metric): m for m in metrics}
     checks = []
     for b in bounds:
         if b.scene != scene:
             continue
-        value = values.get((b.view, b.region, b.metric), float("nan"))
+        record = records.get((b.view, b.region, b.metric))
+        value, interval = float("nan"), None
+        if record is not None and record.excess is not None:
+            value = float(record.excess)
+            interval = tuple(float(x) for x in record.excess_ci95) \
+                if record.excess_ci95 is not None else None
+        elif record is not None:
+            value = float(record.value)
+        verdict = judge(b.kind, b.bound, value, interval)
         # A lock is measured at other settings than the comparison's: its label says so,
         # so its relMSE is not read as the page's number for the same name.
         checks.append(Check(metric=b.metric, region=b.region, view=b.view,
                             bound=b.bound, relation=b.kind, value=value,
-                            passed=b.holds(value), origin=f"{LOCK_SETTINGS}: {b.provenance}",
-                            kind=LOCK))
+                            passed=verdict == "holds",
+                            origin=f"{LOCK_SETTINGS}: {b.provenance}", kind=LOCK,
+                            interval=interval, verdict=verdict if interval is not None else ""))
     return tuple(checks)

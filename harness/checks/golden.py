@@ -17,6 +17,13 @@ Layout of the golden folder (bundled: ``harness/checks/data/golden/``)::
     <scene>/receiver<i>.exr  half-float layers, both divided by the map's ``scale``:
                              RGB   = mean caustic irradiance E (W/m²)
                              sigma = standard error of that mean over the K seeds
+    <scene>/region<i>.png    the scene's caustic region for receiver i (8-bit, 255
+                             inside): ``scene_caustic_region`` of an *independent*
+                             reference, :data:`REGION_SEEDS` seeds of the golden budget
+                             from ``region_seed`` (disjoint from the golden's, the
+                             locks' calibration and the Z-test's seeds), so that the
+                             locks score the golden over texels its own noise did not
+                             choose
 
 Half floats keep the eight maps at about 400 KB: the rounding error of a stored value
 is at most 2^-11 of it, and :func:`load_golden` adds its variance (ulp² / 12) to the
@@ -42,7 +49,9 @@ from pathlib import Path
 
 import numpy as np
 import OpenEXR
+from PIL import Image
 
+from harness.compare.regions import scene_caustic_region
 from renderers.exr import ExrError, read_exr
 from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.reference import estimate_receivers
@@ -51,10 +60,11 @@ from scenes import Scene, load_scene, with_settings
 from scenes.errors import HarnessError
 from scenes.files import atomic_write_bytes, dumps_strict
 
-__all__ = ["FRESH_SEEDS", "GOLDEN_SCENES", "GOLDEN_SETTINGS", "Golden", "GoldenError",
-           "fresh_reference", "golden_scene", "load_golden", "read_manifest", "regenerate"]
+__all__ = ["FRESH_SEEDS", "GOLDEN_SCENES", "GOLDEN_SETTINGS", "REGION_SEEDS", "Golden",
+           "GoldenError", "fresh_reference", "golden_scene", "load_golden", "read_manifest",
+           "regenerate"]
 
-FORMAT = 2
+FORMAT = 3
 #: Paper scenes with golden references.
 GOLDEN_SCENES = ("glass_sphere", "bunny", "colored_bunny", "dispersion_sphere", "water_pool",
                  "seabed", "metal_ring")
@@ -71,6 +81,11 @@ GOLDEN_OVERRIDES = {"seabed": {"photons": 40_000_000}}
 #: Seeds of a fresh render held against a golden reference (the golden's budget per
 #: seed, a quarter of its seeds): the golden carries 1/5 of the Z-test's variance.
 FRESH_SEEDS = 4
+#: The region's independent reference: this many seeds of the golden budget, from the
+#: golden's first seed + :data:`REGION_SEED_OFFSET` (1500..1503 by default; the golden
+#: takes 1000..1015, the locks' calibration 1016 on, the Z-test 1100..1103).
+REGION_SEEDS = 4
+REGION_SEED_OFFSET = 500
 
 
 class GoldenError(HarnessError):
@@ -80,11 +95,13 @@ class GoldenError(HarnessError):
 @dataclass(frozen=True)
 class Golden:
     """One scene's golden receiver maps (variance = that of the stored mean, rounding
-    included) and its manifest entry."""
+    included), each receiver's caustic region (H, W) bool from the independent
+    reference, and its manifest entry."""
 
     scene: str
     receivers: tuple[ReceiverMap, ...]
     entry: dict
+    regions: tuple[np.ndarray, ...] = ()
 
     @property
     def photons(self) -> int:
@@ -132,26 +149,37 @@ def load_golden(golden_dir: Path, name: str) -> Golden:
     entry = read_manifest(golden_dir)["scenes"].get(name)
     if entry is None:
         raise GoldenError(f"{golden_dir / 'manifest.json'}: no golden reference for {name}")
-    receivers = []
+    receivers, regions = [], []
     for i, (extent, scale) in enumerate(zip(entry["receiver_extent"], entry["scale"],
                                             strict=True)):
-        rel = f"{name}/receiver{i}.exr"
-        path = golden_dir / rel
-        if not path.is_file():
-            raise GoldenError(f"{path}: missing")
-        digest = _sha256(path)
-        if digest != entry["sha256"].get(rel):
-            raise GoldenError(f"{path}: SHA-256 {digest} does not match the manifest")
+        path = _checked(golden_dir, entry, f"{name}/receiver{i}.exr")
+        region = _checked(golden_dir, entry, f"{name}/region{i}.png")
         try:
             layers = read_exr(path)
-        except ExrError as error:
-            raise GoldenError(str(error)) from None
+            with Image.open(region) as image:
+                regions.append(np.asarray(image.convert("L")) > 127)
+        except (ExrError, OSError) as error:
+            raise GoldenError(f"{error}") from None
         stored = layers["RGB"]
         variance = (layers["sigma"].astype(np.float64) * scale) ** 2 + _rounding_variance(
             stored, scale)
         receivers.append(ReceiverMap((stored.astype(np.float64) * scale).astype(np.float32),
                                      tuple(extent), variance.astype(np.float32)))
-    return Golden(name, tuple(receivers), entry)
+        if regions[-1].shape != stored.shape[:2]:
+            raise GoldenError(f"{region}: {regions[-1].shape} texels, the map has "
+                              f"{stored.shape[:2]}")
+    return Golden(name, tuple(receivers), entry, tuple(regions))
+
+
+def _checked(golden_dir: Path, entry: dict, rel: str) -> Path:
+    """``golden_dir / rel``, present and matching the manifest's SHA-256."""
+    path = golden_dir / rel
+    if not path.is_file():
+        raise GoldenError(f"{path}: missing")
+    digest = _sha256(path)
+    if digest != entry["sha256"].get(rel):
+        raise GoldenError(f"{path}: SHA-256 {digest} does not match the manifest")
+    return path
 
 
 def fresh_reference(scene: Scene, *, seed: int, seeds: int = FRESH_SEEDS):
@@ -186,7 +214,19 @@ def _render(scene: Scene, out: Path, rel_dir: str) -> dict:
         scales.append(_write_half(out / rel, rmap.irradiance, rmap.variance))
         hashes[rel] = _sha256(out / rel)
     s = scene.settings
+    # The region from an independent reference (module docstring).
+    region_seed = s.seed + REGION_SEED_OFFSET
+    independent = estimate_receivers(
+        with_settings(scene, {"seed": region_seed, "seeds": REGION_SEEDS}),
+        target_noise=1e-12, caustic_only=True)
+    for i, rmap in enumerate(independent.caustic):
+        rel = f"{rel_dir}/region{i}.png"
+        mask = scene_caustic_region(np.asarray(rmap.irradiance))
+        Image.fromarray((mask * 255).astype(np.uint8), mode="L").save(out / rel)
+        os.chmod(out / rel, 0o644)
+        hashes[rel] = _sha256(out / rel)
     return {"photons": int(estimate.photons), "seeds": s.seeds, "seed": s.seed,
+            "region_seed": region_seed, "region_seeds": REGION_SEEDS,
             "relative_noise": estimate.relative_noise, "seconds": seconds,
             "receiver_extent": [list(m.extent) for m in estimate.caustic],
             "resolution": list(s.receiver_map), "scale": scales, "sha256": hashes,

@@ -4,10 +4,15 @@ a lock that holds says the method renders as it did when it was calibrated, noth
 about whether that is right (the physical requirements and method targets say that).
 
 For every golden scene, both presets and receiver i the locked metrics are
-(``LOCKED_METRICS``): relMSE, SSIM (tone-mapped) and FLIP over the reference's caustic
-region, and the total-flux ratio over the whole map, locked from above and from below
-(a lock guards today's value, which need not be 1: a change toward 1 is a change
-too). The render is deterministic on one machine; what varies is
+(``LOCKED_METRICS``): the excess relMSE (against the noise-free image, with its 95 %
+interval from the golden's variance: :func:`harness.checks.targets.caustic_relmse`, the
+comparison's own estimator), SSIM (tone-mapped) and FLIP over the scene's caustic
+region (the golden's ``region<i>.png``, thresholded on an independent reference, as
+every comparison thresholds it), and the total-flux ratio over the whole map, locked
+from above and from below (a lock guards today's value, which need not be 1: a change
+toward 1 is a change too). The excess lock is judged from its interval (holds, fails
+or undecided: :func:`harness.checks.bounds.judge`); the others from the value. The
+render is deterministic on one machine; what varies is
 
 * the reference: calibration scores the render against the golden reference and
   against ``extra`` independent references (disjoint seeds, the golden budget);
@@ -19,7 +24,8 @@ too). The render is deterministic on one machine; what varies is
 
 The bound is then
 
-    max (relMSE, FLIP):   worst + max(3σ, 3Δ, 5 % of worst)
+    max (relMSE, FLIP):   worst + max(3σ, 3Δ, 5 % of worst)   (relMSE: the worst is the
+                          largest upper end of the excess's interval)
     min (SSIM):           worst − max(3σ, 3Δ, 5 % of (1 − worst))
     flux ratio:           highest + max(3σ, 3Δ, 0.005) and lowest − max(3σ, 3Δ, 0.005)
 
@@ -38,19 +44,27 @@ from pathlib import Path
 import numpy as np
 
 from harness.checks.bounds import Bound, check_locks
-from harness.checks.golden import GOLDEN_SETTINGS, golden_scene, load_golden, read_manifest
+from harness.checks.golden import (
+    GOLDEN_SETTINGS,
+    Golden,
+    golden_scene,
+    load_golden,
+    read_manifest,
+)
+from harness.checks.targets import caustic_relmse
 from harness.compare.evaluate import exposure_for, score_value
-from harness.compare.regions import caustic_region
+from harness.compare.scoring import channel_correlation
 from renderers.caustics_mapping import render
 from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.reference import estimate_receivers
+from renderers.results import ReceiverMap
 from reports.records import MetricValue
 from scenes import Scene, with_settings
 from scenes.files import atomic_write_bytes
 
 __all__ = ["JITTER", "LOCKED_METHODS", "LOCKED_METRICS", "accuracy_metrics", "calibrate",
-           "golden_applies", "jittered", "lock_checks", "not_committed", "realtime_maps",
-           "write_locks"]
+           "golden_applies", "golden_metrics", "jittered", "lock_checks", "not_committed",
+           "realtime_maps", "write_locks"]
 
 #: (region, metric, kind) locked for every receiver of every golden scene.
 LOCKED_METRICS = (("caustic", "relmse", "max"), ("caustic", "ssim", "min"),
@@ -69,17 +83,45 @@ def realtime_maps(scene: Scene, *, ctx=None) -> list[np.ndarray]:
     return [m.irradiance for m in render(small, ctx=ctx).receivers]
 
 
-def accuracy_metrics(test_maps, reference_maps) -> list[MetricValue]:
-    """The locked metrics of each receiver map against its reference (each once)."""
+def accuracy_metrics(test_maps, references, regions, *, seeds: int,
+                     channel_correlation: float = 1.0) -> list[MetricValue]:
+    """The locked metrics of each receiver map against its reference (each once).
+
+    Parameters
+    ----------
+    test_maps : list of ndarray (H, W, 3)
+        The method's receiver irradiance, W/m².
+    references : list of ReceiverMap
+        The references, with their variance of the mean (K = ``seeds`` seeds).
+    regions : list of ndarray (H, W) of bool
+        The scene's caustic region of each receiver (the golden's ``region<i>.png``).
+    channel_correlation : float
+        1 when the same photons carry all three channels, 0 for one pass per channel.
+    """
     values = []
-    for i, (method, reference) in enumerate(zip(test_maps, reference_maps, strict=True)):
-        regions = {"caustic": caustic_region(reference),
-                   "full": np.ones(reference.shape[:2], bool)}
-        exposure = exposure_for(reference)
-        for region, metric in dict.fromkeys((r, m) for r, m, _ in LOCKED_METRICS):
-            values.append(MetricValue(f"receiver{i}", region, metric, score_value(
-                metric, method, reference, mask=regions[region], exposure=exposure)))
+    for i, (method, reference, region) in enumerate(zip(test_maps, references, regions,
+                                                       strict=True)):
+        ref = np.asarray(reference.irradiance)
+        regions_of = {"caustic": np.asarray(region, bool), "full": np.ones(ref.shape[:2], bool)}
+        exposure = exposure_for(ref)
+        for name, metric in dict.fromkeys((r, m) for r, m, _ in LOCKED_METRICS):
+            if metric == "relmse":
+                values.append(caustic_relmse(
+                    reference, ReceiverMap(np.asarray(method), reference.extent),
+                    regions_of[name], seeds=seeds, channel_correlation=channel_correlation,
+                    view=f"receiver{i}"))
+                continue
+            values.append(MetricValue(f"receiver{i}", name, metric, score_value(
+                metric, method, ref, mask=regions_of[name], exposure=exposure),
+                pixels=int(regions_of[name].sum())))
     return values
+
+
+def golden_metrics(scene: Scene, maps, golden: Golden) -> list[MetricValue]:
+    """:func:`accuracy_metrics` of ``maps`` against ``golden`` over its regions."""
+    return accuracy_metrics(maps, list(golden.receivers), list(golden.regions),
+                            seeds=int(golden.entry["seeds"]),
+                            channel_correlation=channel_correlation(scene))
 
 
 def _lock_name(scene: str, method: str) -> str:
@@ -110,8 +152,8 @@ def golden_applies(scene: Scene, scenes_dir: Path, golden_dir: Path) -> str | No
 def lock_checks(scene: Scene, method: str, maps, golden, locks):
     """The locks of ``scene`` and ``method`` for the method's ``maps`` at the golden
     settings against ``golden`` (:class:`harness.checks.golden.Golden`)."""
-    metrics = accuracy_metrics(maps, [m.irradiance for m in golden.receivers])
-    return check_locks(_lock_name(scene.name, method), metrics, locks)
+    return check_locks(_lock_name(scene.name, method), golden_metrics(scene, maps, golden),
+                       locks)
 
 
 def jittered(scene: Scene, offset) -> Scene:
@@ -123,6 +165,15 @@ def jittered(scene: Scene, offset) -> Scene:
         return dataclasses.replace(scene, light=dataclasses.replace(light, position=moved))
     turned = tuple(float(a + b) for a, b in zip(light.direction, offset, strict=True))
     return dataclasses.replace(scene, light=dataclasses.replace(light, direction=turned))
+
+
+def _locked(value: MetricValue) -> tuple[float, float]:
+    """The locked number of a metric record and the end of its interval a lock from
+    above must keep: the excess and its upper end where it has one, else the value."""
+    if value.excess is not None:
+        high = value.excess_ci95[1] if value.excess_ci95 is not None else value.excess
+        return float(value.excess), float(high)
+    return float(value.value), float(value.value)
 
 
 def _bound(metric: str, kind: str, values: np.ndarray, jitter: float) -> tuple[float, float]:
@@ -149,23 +200,32 @@ def calibrate(scenes_dir: Path, golden_dir: Path, names, *, extra: int = 3,
     for name in names:
         scene = golden_scene(scenes_dir, name)
         golden = load_golden(golden_dir, name)
-        references = [[m.irradiance for m in golden.receivers]]
+        references = [list(golden.receivers)]
         for r in range(extra):
             other = with_settings(scene, {"seed": golden.entry["seed"] + k * (r + 1)})
             estimate = estimate_receivers(other, target_noise=1e-12, caustic_only=True)
-            references.append([m.irradiance for m in estimate.caustic])
+            references.append(list(estimate.caustic))
+        rho = channel_correlation(scene)
+
+        def metrics(maps, reference, rho=rho, golden=golden):
+            return accuracy_metrics(maps, reference, list(golden.regions), seeds=k,
+                                    channel_correlation=rho)
+
         for method in methods:
             configured = with_settings(scene, {"preset": method})
             maps = realtime_maps(configured, ctx=ctx)
-            runs = [accuracy_metrics(maps, ref) for ref in references]
-            jitters = [accuracy_metrics(realtime_maps(jittered(configured, offset), ctx=ctx),
-                                        references[0])
+            runs = [metrics(maps, ref) for ref in references]
+            jitters = [metrics(realtime_maps(jittered(configured, offset), ctx=ctx),
+                               references[0])
                        for offset in ((JITTER, 0, 0), (-JITTER, 0, 0), (0, JITTER, 0),
                                       (0, -JITTER, 0))]
             for j, first in enumerate(runs[0]):
-                values = np.array([run[j].value for run in runs], float)
-                moved = np.array([run[j].value for run in jitters], float)
-                delta = float(np.max(np.abs(moved - values[0])))
+                locked = np.array([_locked(run[j]) for run in runs], float)
+                moved = np.array([_locked(run[j]) for run in jitters], float)
+                delta = float(np.max(np.abs(moved[:, 0] - locked[0, 0])))
+                # A lock from above keeps the intervals' upper ends (the value itself
+                # where there is no interval); from below the values.
+                values, moved = locked[:, 1], moved[:, 1]
                 for kind in (kd for reg, met, kd in LOCKED_METRICS
                              if (reg, met) == (first.region, first.metric)):
                     bounds.append(_lock(name, method, first, kind=kind, values=values,
@@ -179,14 +239,27 @@ def _lock(name, method, first, *, kind, values, moved, delta, extra, today, v) -
     bound, worst = _bound(first.metric, kind, np.concatenate([values, moved]), delta)
     margin = "max(3 sd, 3 jitter, 0.005)" if first.metric == "flux_ratio" else \
         "max(3 sd, 3 jitter, 5 %)"
+    what = "excess relMSE's 95 % upper ends" if first.excess is not None else "values"
     provenance = (
-        f"{len(values)} references (golden + {extra} disjoint seeds): "
+        f"{len(values)} references (golden + {extra} disjoint seeds), {what}: "
         f"{values.min():.4g}..{values.max():.4g}, sd {values.std():.2g}; light "
         f"jitter {JITTER:g} m (platform rounding): change up to {delta:.2g}; "
         f"worst {worst:.4g}; margin {margin}; {today}; "
         f"llvmpipe; mitsuba {v.get('mitsuba')}, drjit {v.get('drjit')}")
     return Bound(scene=_lock_name(name, method), view=first.view, region=first.region,
-                 metric=first.metric, kind=kind, bound=round(bound, 6), provenance=provenance)
+                 metric=first.metric, kind=kind, bound=_outward(bound, kind),
+                 provenance=provenance)
+
+
+def _outward(bound: float, kind: str, digits: int = 4) -> float:
+    """``bound`` to ``digits`` significant digits, rounded away from the calibrated
+    values (up for ``max``, down for ``min``): a strong preset's excess of 8e-6 keeps
+    its margin, which rounding to a fixed number of decimals would take away."""
+    if bound == 0 or not np.isfinite(bound):
+        return float(bound)
+    scale = 10.0 ** (np.floor(np.log10(abs(bound))) - (digits - 1))
+    step = np.ceil if kind == "max" else np.floor
+    return float(f"{step(bound / scale) * scale:.{digits}g}")
 
 
 def write_locks(path: Path, bounds: list[Bound]) -> None:

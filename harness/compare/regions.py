@@ -31,7 +31,8 @@ def scene_caustic_region(independent: np.ndarray) -> np.ndarray:
 
     The region belongs to the scene, not the method: it is computed from references
     alone, once per scene and receiver, and every method, study, accuracy check
-    (regression locks aside), sweep row and pytest assertion of that scene scores the
+    sweep row, regression lock (the golden's ``region<i>.png``, from an independent
+    reference of its own) and pytest assertion of that scene scores the
     same texels, so a method that spreads dim light
     cannot move its own denominator (light it puts outside is scored by the
     ``full`` region and by the ``stray_flux`` measure). It is not thresholded on the
@@ -39,12 +40,9 @@ def scene_caustic_region(independent: np.ndarray) -> np.ndarray:
     every noise correction (``harness.metrics.excess``); the independent reference's
     noise is independent of the scored one's.
 
-    Three paths score elsewhere, each against a reference of its own that has no
-    independent twin: the regression locks (:mod:`harness.checks.locks`, over the
-    golden reference's :func:`caustic_region`, the rule they were calibrated with), the
-    paper figures (:func:`harness.figures.common.receiver_scores`, over the figure's
-    reference's) and the temporal study's frames (each frame's reference's). Within
-    each, too, every method is scored over the same texels.
+    The paper figures (:meth:`harness.figures.common.FigureContext.region`) and the
+    temporal study's frames (each frame's independent reference) threshold their
+    independent references the same way.
 
     Parameters
     ----------

@@ -37,9 +37,11 @@ def figure_10(ctx: FigureContext):
                                     methods=[("paper preset", method),
                                              ("strong preset", strong)])
     axes[2, 0].set_axis_off()
-    scores = receiver_scores(method.receivers[0].irradiance, ref.receivers[0].irradiance)
+    region = ctx.region(scene)
+    scores = receiver_scores(method.receivers[0].irradiance, ref.receivers[0].irradiance,
+                             region=region)
     strong_scores = receiver_scores(strong.receivers[0].irradiance,
-                                    ref.receivers[0].irradiance)
+                                    ref.receivers[0].irradiance, region=region)
     ms = frame_seconds(method.timings) * 1e3
     strong_ms = frame_seconds(strong.timings) * 1e3
     data = {"scene": scene.name, "grid": scene.settings.grid, "frame_ms": ms,

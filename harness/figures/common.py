@@ -30,7 +30,7 @@ from matplotlib.text import Annotation, Text
 
 from harness.compare.evaluate import exposure_for, score_value
 from harness.compare.outputs import write_json, write_table
-from harness.compare.regions import caustic_region
+from harness.compare.regions import scene_caustic_region
 from renderers.caustics_mapping import create_context, render
 from renderers.mitsuba.reference import render_reference
 from reports.records import Table
@@ -252,6 +252,15 @@ class FigureContext:
 
         return render_reference(scene, cache=self.cache, progress=self.progress)
 
+    def region(self, scene: Scene, receiver: int = 0) -> np.ndarray:
+        """The scene's caustic region of ``receiver`` (H, W) bool, as ``compare`` has it:
+        thresholded on the independent reference (the disjoint seeds ``seed + K`` to
+        ``seed + 2K − 1``, cached like the reference), never on the scored one."""
+
+        s = scene.settings
+        independent = self.reference(with_settings(scene, {"seed": s.seed + s.seeds}))
+        return scene_caustic_region(np.asarray(independent.receivers[receiver].irradiance))
+
     def close(self) -> None:
         if self._gl is not None:
             self._gl.release()
@@ -292,11 +301,12 @@ class FigureContext:
         return FigureResult(name, caption, tuple(files))
 
 
-def receiver_scores(method: np.ndarray, reference: np.ndarray) -> dict[str, float]:
-    """relMSE, SSIM and FLIP of a receiver map over the reference's caustic region,
-    and the total-flux ratio over the whole map."""
+def receiver_scores(method: np.ndarray, reference: np.ndarray, *, region: np.ndarray
+                    ) -> dict[str, float]:
+    """relMSE, SSIM and FLIP of a receiver map over the scene's caustic ``region``
+    (:meth:`FigureContext.region`), and the total-flux ratio over the whole map."""
 
-    mask = caustic_region(reference)
+    mask = np.asarray(region, bool)
     exposure = exposure_for(reference)
     out = {m: score_value(m, method, reference, mask=mask, exposure=exposure)
            for m in ("relmse", "ssim", "flip")}

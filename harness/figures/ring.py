@@ -20,7 +20,8 @@ def figure_12(ctx: FigureContext):
     rwhite = shared_white(ref.receivers[0].irradiance)
     show(axes[2], method.receivers[0].irradiance, white=rwhite, receiver=True,
          title="caustics mapping receiver map")
-    scores = receiver_scores(method.receivers[0].irradiance, ref.receivers[0].irradiance)
+    scores = receiver_scores(method.receivers[0].irradiance, ref.receivers[0].irradiance,
+                             region=ctx.region(scene))
     data = {"scene": scene.name, "passes": method.metadata.get("passes"),
             "map_faces": method.metadata.get("map_faces"),
             "frame_ms": frame_seconds(method.timings) * 1e3,

@@ -38,6 +38,7 @@ def figure_06(ctx: FigureContext):
 
     runs = _sphere_runs(ctx)
     ref = runs["reference"]
+    region = ctx.region(ctx.scene("glass_sphere"))
     white = shared_white(ref.camera)
     fig, grid = plt.subplots(2, 4, figsize=(12, 6.6), layout="constrained")
     axes = grid[0]
@@ -48,7 +49,8 @@ def figure_06(ctx: FigureContext):
     for ax, (label, key, preset, iterations) in zip(axes[:3], entries, strict=True):
         result = runs[key]
         estimator = result.metadata["estimator"]
-        scores = receiver_scores(result.receivers[0].irradiance, ref.receivers[0].irradiance)
+        scores = receiver_scores(result.receivers[0].irradiance, ref.receivers[0].irradiance,
+                                 region=region)
         ms = frame_seconds(result.timings) * 1e3
         rows.append((label, estimator, preset, iterations, scores["relmse"], scores["ssim"],
                      scores["flip"], scores["flux_ratio"], ms))
@@ -120,7 +122,7 @@ def figure_11(ctx: FigureContext):
     white = shared_white(reference)
     fig, axes = plt.subplots(1, 3, figsize=(9, 3.2))
     rows = []
-    mask = reference.mean(axis=-1) > 0.1 * np.percentile(reference.mean(axis=-1), 99.5)
+    mask = ctx.region(ctx.scene("glass_sphere"))
     # Fixed-size splats (1 texel of a fine 1024² map, 512² in quick mode), like the
     # paper's point sprites, make the spacing between splats of a coarse grid visible;
     # the grid-relative default splat width would hide it.
@@ -129,7 +131,7 @@ def figure_11(ctx: FigureContext):
         result = ctx.realtime(ctx.scene("glass_sphere", grid=grid, caustic_map=fine,
                                         splat_sigma=1.0))
         image = result.receivers[0].irradiance
-        scores = receiver_scores(image, reference)
+        scores = receiver_scores(image, reference, region=mask)
         # A gap: a texel of the reference's caustic with under 10 % of its light.
         gaps = float(np.mean(image.mean(axis=-1)[mask] < 0.1 * reference.mean(axis=-1)[mask]))
         rows.append({"grid": grid, "receiver_relmse": scores["relmse"], "gap_fraction": gaps,

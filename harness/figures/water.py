@@ -37,7 +37,8 @@ def figure_05(ctx: FigureContext):
         show(axes[i, 0], method.receivers[i].irradiance, white=white, receiver=True,
              title=f"{name}: caustics mapping")
         show(axes[i, 1], reference, white=white, receiver=True, title=f"{name}: reference")
-        scores = receiver_scores(method.receivers[i].irradiance, reference)
+        scores = receiver_scores(method.receivers[i].irradiance, reference,
+                                 region=ctx.region(scene, i))
         rows.append({"receiver": name, **{k: scores[k] for k in _SCORES}})
     table = Table.from_records(("receiver", *_SCORES), rows)
     caption = ("Fig. 5 analogue: underwater caustics on a rugged heightfield and a rock "

@@ -21,9 +21,11 @@ overrides the count):
    (``harness.metrics.temporal`` holds the formulas); :func:`compare_sequences` is
    this step alone, on sequences from anywhere.
 
-The caustic region of a frame is the reference's (``harness.compare.regions``); over
-time, a frame pair scores the union of its two frames' regions, and the energy ratio
-the union over every frame.
+The caustic region of a frame is the scene's, as every comparison has it
+(:func:`harness.compare.regions.scene_caustic_region`): thresholded on the independent
+reference's frame, never on the scored reference's, so its noise does not choose the
+texels it is scored on; over time, a frame pair scores the union of its two frames'
+regions, and the energy ratio the union over every frame.
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.compare.evaluate import exposure_for
-from harness.compare.regions import caustic_region
+from harness.compare.regions import scene_caustic_region
 from harness.compare.timed import render_method
 from harness.metrics import (
     MetricInputError,
@@ -242,7 +244,7 @@ def compare_sequences(reference: np.ndarray, method: np.ndarray, independent: np
     independent = np.asarray(independent, np.float32)
     count = len(reference)
     exposure = exposure_for(np.concatenate(list(reference), axis=0))
-    caustic = np.stack([caustic_region(r) for r in reference])
+    caustic = np.stack([scene_caustic_region(r) for r in independent])
     # FLIP is the cost here (about 2 s a 256² frame on one core); its C++ releases the
     # GIL, so the frames are scored on a thread per core.
     with ThreadPoolExecutor(max_workers=max(1, min(count, os.cpu_count() or 1))) as pool:

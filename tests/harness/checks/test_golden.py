@@ -154,20 +154,29 @@ def test_golden_references_are_checked_on_load(tmp_path):
 
 def test_missing_or_unreadable_golden_files_are_errors_naming_them(tmp_path):
     """Never a silent "no golden": a missing manifest, an unreadable one, a missing
-    map and an unknown scene each raise GoldenError with the path."""
+    map, a missing or altered region and an unknown scene each raise GoldenError with
+    the path."""
     with pytest.raises(GoldenError, match=rf"{tmp_path}/manifest\.json: unreadable"):
         read_manifest(tmp_path)
     (tmp_path / "manifest.json").write_text("{not json")
     with pytest.raises(GoldenError, match=r"manifest\.json: unreadable manifest"):
         read_manifest(tmp_path)
     (tmp_path / "manifest.json").write_text(json.dumps({"format": 1, "scenes": {}}))
-    with pytest.raises(GoldenError, match="format 1, expected 2"):
+    with pytest.raises(GoldenError, match="format 1, expected 3"):
         read_manifest(tmp_path)
     copy = tmp_path / "golden"
     shutil.copytree(GOLDEN_DIR, copy)
     (copy / "bunny" / "receiver0.exr").unlink()
     with pytest.raises(GoldenError, match=r"bunny/receiver0\.exr: missing"):
         load_golden(copy, "bunny")
+    # The caustic region the locks score over is part of the golden: a missing or
+    # altered one is an error too, never the golden's own region instead.
+    (copy / "glass_sphere" / "region0.png").unlink()
+    with pytest.raises(GoldenError, match=r"glass_sphere/region0\.png: missing"):
+        load_golden(copy, "glass_sphere")
+    shutil.copy(GOLDEN_DIR / "bunny" / "region0.png", copy / "glass_sphere" / "region0.png")
+    with pytest.raises(GoldenError, match=r"glass_sphere/region0\.png: SHA-256"):
+        load_golden(copy, "glass_sphere")
     with pytest.raises(GoldenError, match="no golden reference for nowhere"):
         load_golden(copy, "nowhere")
 

@@ -14,8 +14,9 @@ import pytest
 from harness.checks import LOCKS_FILE
 from harness.checks.bounds import load_locks
 from harness.checks.golden import GOLDEN_SCENES, golden_scene
-from harness.checks.locks import LOCKED_METHODS, accuracy_metrics, lock_checks, realtime_maps
+from harness.checks.locks import LOCKED_METHODS, golden_metrics, lock_checks, realtime_maps
 from harness.checks.ztest import write_failure_images
+from harness.compare.regions import caustic_region
 from renderers.caustics_mapping import context as gl_context
 from scenes import with_settings
 from tests.conftest import SCENES
@@ -55,8 +56,9 @@ def test_regression_lock(golden_renders, failure_dir, record_property, case):
         for i, (m, g) in enumerate(zip(maps, golden.receivers, strict=True)):
             written += write_failure_images(failure_dir, f"lock-{name}-{method}-receiver{i}",
                                             test=m, reference=g.irradiance)
-        pytest.fail("\n".join(f"{c.view}.{c.region}.{c.metric} = {c.value:.5g} violates "
-                              f"{c.bound_text}" for c in failed)
+        pytest.fail("\n".join(f"{c.view}.{c.region}.{c.metric} = {c.value:.5g} "
+                              f"{c.interval_text} {c.decision} against {c.bound_text}"
+                              for c in failed)
                     + f"\nimages: {written[0].parent}")
 
 
@@ -131,11 +133,22 @@ def test_shader_breaks_fail_a_regression_lock(golden_renders, monkeypatch, ctx, 
 
 
 def test_accuracy_metrics_are_the_locked_ones(golden_renders):
-    """Four metrics per receiver, in the order of ``LOCKED_METRICS``."""
+    """Four metrics per receiver, in the order of ``LOCKED_METRICS``, over the golden's
+    regions (the independent reference's, not the golden's own: they differ, and the
+    caustic records count the region's texels); the relMSE carries its excess and
+    interval."""
     golden = golden_renders.golden("seabed")
-    values = accuracy_metrics(golden_renders.maps("seabed", "paper"),
-                              [m.irradiance for m in golden.receivers])
+    values = golden_metrics(golden_renders.scene("seabed", "paper"),
+                            golden_renders.maps("seabed", "paper"), golden)
     assert [(v.view, v.region, v.metric) for v in values][:4] == [
         ("receiver0", "caustic", "relmse"), ("receiver0", "caustic", "ssim"),
         ("receiver0", "caustic", "flip"), ("receiver0", "full", "flux_ratio")]
+    for i, region in enumerate(golden.regions):
+        caustic = [v for v in values if v.view == f"receiver{i}" and v.region == "caustic"]
+        assert {v.pixels for v in caustic} == {int(region.sum())}
+        own = caustic_region(np.asarray(golden.receivers[i].irradiance))
+        assert (own != region).any()
+    relmse = values[0]
+    assert relmse.excess is not None and relmse.excess_ci95[0] < relmse.excess \
+        < relmse.excess_ci95[1]
     assert len(values) == 8
