@@ -237,14 +237,17 @@ float shading_factor(vec3 d, vec3 d2, vec3 n, vec3 ng) {
     return den > 0.0 ? abs(dot(d, n)) * abs(dot(d2, ng)) / den : 0.0;
 }
 
-// The geometric normal of the exit surface at x's projection (nearest texel).
+// The geometric normal of the exit surface at x's projection (nearest texel; zero
+// where x projects outside the views).
 vec3 back_geometric_at(vec3 x) {
     int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
     vec2 ndc;
-    if (!project(u_obj_vp[face], x, ndc)) return vec3(0.0);
-    ivec2 t = clamp(ivec2((ndc * 0.5 + 0.5) * float(u_back_size)), ivec2(0),
-                    ivec2(u_back_size - 1));
-    return texelFetch(u_back_geometric, t + ivec2(face * u_back_size, 0), 0).xyz;
+    vec4 q;
+    vec3 g = vec3(0.0);
+    if (project(u_obj_vp[face], x, ndc))
+        surface_read(u_back_positions, u_back_geometric, face, u_back_size,
+                     (ndc * 0.5 + 0.5) * float(u_back_size), false, q, g);
+    return g;
 }
 
 // The exit point v + d r of the ray inside a closed object, and the exit normal bn.
