@@ -58,14 +58,23 @@ split), so
     Var = α² v + 2 β² v² K / (K − 1)        (Var v̂ = 2 v² / (K − 1), Gaussian).
 
 At b = 0 this is the 2 v² (1 + 1/(K − 1)) of the brief's (M − R)² − v̂; at b ≠ 0 the
-4 b² v term dominates. The plug-in α(R)² overstates α² by h''² v (its own noise), a
-100 % error at b = 0, so it is subtracted, and products v̂ v̂ are divided by
-E[v̂ v̂] / (v v) = 1 + 2ρ² / (K − 1). The plug-in h''(R)² is itself inflated by R's noise
-(h'' moves with −6η/T through d = M − R: by about 72 v/T² at b = 0), in the quadratic
-part and in the linear part's subtraction alike; a second-order correction of it
-over-corrects at 10 % relative noise, so it is left, and the SE is conservative there
-(about 10 % high, docs/statistics.md). With the per-seed maps, k̂₃'s variance
-(⅓ h''')² 6 v³ / ((K − 1)(K − 2)) (Gaussian seeds) joins the quadratic part.
+4 b² v term dominates. The coefficients are known only at R, and each plug-in is
+corrected to second order in R's noise (E[a(R) b(R)] = a b + a' b' Cov + ½ (a'' b v_a +
+a b'' v_b)): α(R)² = h'(R)² overstates α² by (h''² + h' h''') v, the first part a 100 %
+error at b = 0; h''(R)² overstates h''² by (h'''² + h'' h'''') v, 72 v/T² of it at
+b = 0 (h'' moves with −6η/T through d = M − R), 72 % at 10 % relative noise. Both are
+subtracted, each product of variance estimates divided by its Gaussian expectation
+ratio: E[v̂ v̂] / (v v) = f = 1 + 2ρ² / (K − 1), E[v̂³] / v³ = f₃ = (K + 1)(K + 3) /
+(K − 1)² (3.89 at K = 4). With the per-seed maps, k̂₃'s variance (⅓ h''')² 6 v³ /
+((K − 1)(K − 2) f₃) (Gaussian seeds) joins the quadratic part, and skewed noise's
+covariance of the plug-ins with the variance estimates they multiply (Cov(η, v̂) = μ₃:
+E[h'(R)² v̂] carries 2 h' h'' μ₃, E[h''(R)² v̂²] 4 h'' h''' v μ₃, their sign the bias's)
+is removed, μ₃ taken as κ v² / T with κ pooled over the region
+(:attr:`NoiseStructure.skew_ratio`; each texel's own k̂₃ is too noisy at K = 4 to
+multiply into a variance). What is left is the variance's own third order (about
++20 v/T² at b = 0, Gaussian; in a one-texel simulation, model over true variance 0.97 to
+1.01 under Poisson and compound-Poisson noise at 5 and 10 %, 1.02 to 1.12 for
+Gaussian noise at 10 %; docs/statistics.md).
 
 Texels and channels: the photon tracer deposits each photon in the one texel its
 (u, v) falls in (nearest texel, ``renderers.mitsuba.photons``), but one launch's photons
@@ -104,8 +113,9 @@ from scipy.special import gammaln, stdtrit
 
 from harness.metrics.scores import RELMSE_EPSILON, MetricInputError, relative_mse
 
-__all__ = ["CONFIDENCE", "ExcessError", "excess_relative_mse", "relmse_variance_terms",
-           "t_interval"]
+__all__ = ["CONFIDENCE", "ExcessError", "excess_relative_mse", "relmse_covariance",
+           "relmse_variance_terms", "t_interval"]
+
 
 #: Two-sided confidence of the reported interval.
 CONFIDENCE = 0.95
@@ -228,11 +238,19 @@ class NoiseStructure:
         (K (K − 1)) the unbiased covariance of the two texels' means.
     seeds : int
         K.
+    skew_ratio : float
+        κ of the photon-noise relation μ₃ = κ v² / T (1 for unit-weight Poisson
+        photons, E[w³] E[w] / E[w²]² for weighted ones), pooled over the region:
+        Σ k̂₃ / Σ (v̂² / (R f)) with f = E[v̂²] / v² = 1 + 2 / (K − 1) (0 below K = 3
+        seeds or where R has no light). The standard error takes the skew from it,
+        κ v̂² / (R f), rather than from each texel's k̂₃, which at K = 4 is too noisy
+        to multiply into a variance.
     """
 
     third_moment: np.ndarray | None
     correlation: dict
     seeds: int
+    skew_ratio: float = 0.0
 
 
 #: Radius (texels) of the square window of neighbour offsets whose noise covariance
@@ -304,13 +322,21 @@ def noise_structure(seed_estimates, *, mask=None,
         cov = (pair[0][both] * pair[1][both]).sum() / (k * (k - 1.0))
         scale = np.sqrt(float(va[both].sum()) * float(vb[both].sum()))
         correlation[(dy, dx)] = float(cov / scale) if scale > 0 else 0.0
-    return NoiseStructure(third_moment=third, correlation=correlation, seeds=k)
+    skew = 0.0
+    if third is not None:
+        mean = x.mean(axis=0)
+        lit = sel[..., None] & (mean > 0)
+        scale = float((var[lit] ** 2 / mean[lit]).sum()) / (1.0 + 2.0 / (k - 1.0))
+        skew = float(third[lit].sum()) / scale if scale > 0 else 0.0
+    return NoiseStructure(third_moment=third, correlation=correlation, seeds=k,
+                          skew_ratio=skew)
 
 
-def _neighbour_variance(g, hh, v, sel, *, noise: NoiseStructure, rho, k: float):
+def _neighbour_variance(g, hh, h3, v, sel, *, noise: NoiseStructure, rho, k: float):
     """Σ over texel pairs i ≠ j of the region of the terms' covariances (both orders):
     linear ρ_o Σ_cc' P_cc' (g_ic σ_ic)(g_jc' σ_jc') with the plug-in's excess
-    E[g(R_i) g(R_j)] − g_i g_j = h''_i h''_j c_ij removed, and quadratic
+    E[g(R_i) g(R_j)] − g_i g_j = h''_i h''_j c_ij + ½ (h'''_i g_j v_i + g_i h'''_j v_j)
+    removed (h3: h''' per texel and channel), and quadratic
     2 β_i β_j c_ij² K / (K − 1) per channel pair (β = ½ h'', Cov of η² − v̂ for
     Gaussian noise), c_ij = ρ_o P_cc' σ_ic σ_jc' with ρ_o the pooled correlation of the
     offset and P the channels' correlation. E[σ̂_i σ̂_j] = c₄² σ_i σ_j (independent
@@ -326,10 +352,103 @@ def _neighbour_variance(g, hh, v, sel, *, noise: NoiseStructure, rho, k: float):
         gs_a, gs_b = (a[both] for a in _pairs(g * s, dy, dx))  # (n, C)
         hv_a, hv_b = (a[both] for a in _pairs(hh * v, dy, dx))
         cross = np.einsum("nc,cd,nd->", gs_a, rho, gs_b) / c4sq
+        # E[g(R_i) g(R_j)] − g_i g_j also carries ½ (h'''_i g_j v_i + g_i h'''_j v_j),
+        # as a texel's own g(R)² does (E[σ̂³ σ̂] = c₃ c₄ σ³ σ).
+        hs_a, hs_b = (a[both] for a in _pairs(h3 * s * v, dy, dx))
+        cross = cross - 0.5 * (np.einsum("nc,cd,nd->", hs_a, rho, gs_b)
+                               + np.einsum("nc,cd,nd->", gs_a, rho, hs_b)) / (_c3(k) * _c4(k))
         plug = np.einsum("nc,cd,nd->", hv_a, rho * rho, hv_b)
         linear += 2.0 * (r * cross - r * r * plug)
         quadratic += 2.0 * 0.5 * r * r * plug * k / (k - 1.0)
     return float(linear), float(quadratic)
+
+
+def _c3(seeds: float) -> float:
+    """E[v̂^(3/2)] / v^(3/2) for a Gaussian variance with n = K − 1 degrees of freedom:
+    (2 / n)^(3/2) Γ((n + 3) / 2) / Γ(n / 2) (1.228 at K = 4)."""
+    n = float(seeds) - 1.0
+    return float((2.0 / n) ** 1.5 * np.exp(gammaln((n + 3.0) / 2.0) - gammaln(n / 2.0)))
+
+
+def _triple_ratio(k: float, rho2):
+    """E[v̂_a v̂_b v̂_c] / (v_a v_b v_c) for Gaussian variance estimates of K − 1 degrees
+    of freedom: E[χ³_n] / n³ = (n + 2)(n + 4) / n², n = K − 1, for one channel (3.89 at
+    K = 4), taken to 1 as the channels' squared correlation ρ² goes to 0 (the products
+    that enter are a channel's own or those of ρ = 1 channels)."""
+    return 1.0 + rho2 * ((k + 1.0) * (k + 3.0) / (k - 1.0) ** 2 - 1.0)
+
+
+def _outer(a, b=None):
+    """(..., C, C) products a_c b_d of two (..., C) arrays (b defaults to a)."""
+    return a[..., :, None] * (a if b is None else b)[..., None, :]
+
+
+def _taylor_parts(m, r, v, *, k: float, rho, epsilon: float,
+                  noise: NoiseStructure | None, other=None):
+    """The one-reference ("taylor") terms of method ``m`` and the model covariance of
+    its terms with those of ``other`` (default ``m`` itself: their variance), per
+    texel and channel pair (..., C, C), in two parts, linear and quadratic, before the
+    channels' correlations are applied (module docstring, "Standard error")."""
+    h, g, hh, h4 = _h_derivatives(m, r, epsilon)
+    h3 = _h3(m, r, epsilon)
+    # Second order removes ½ h'' v; the fourth-order remainder, E[h(R)] −
+    # E[½ h''(R) v̂] − h(T) = (1/24 − 1/4) h · 3v²/3 = −⅛ h v² (Gaussian
+    # μ₄ = 3v²), is added back with E[v̂²] = v² (K + 1)/(K − 1).
+    terms = h - 0.5 * hh * v + 0.125 * h4 * v * v * (k - 1.0) / (k + 1.0)
+    if other is None:
+        g_o, hh_o, h4_o, h3_o = g, hh, h4, h3
+    else:
+        _, g_o, hh_o, h4_o = _h_derivatives(other, r, epsilon)
+        h3_o = _h3(other, r, epsilon)
+    rho2 = rho * rho
+    f = 1.0 + 2.0 * rho2 / (k - 1.0)  # E[v̂_c v̂_d] / (v_c v_d), Gaussian
+    f3 = _triple_ratio(k, rho2)        # E[v̂ v̂ v̂] / v³
+    s = np.sqrt(v)
+    ss, vv = _outer(s), _outer(v)
+    va = np.broadcast_to(v[..., :, None], vv.shape)  # the first channel's v
+    vb = np.broadcast_to(v[..., None, :], vv.shape)  # the second's
+    # The coefficients are taken at R, not T. To second order in R's noise
+    # E[a(R) b(R)] = a b + a' b' Cov + ½ (a'' b v_a + a b'' v_b): g(R)² overstates
+    # g² by (h''² + g h''') v and h''(R)² overstates h''² by (h'''² + h'' h'''') v
+    # (72 v/T² of h''² at b = 0, 72 % at 10 % relative noise). Both are removed.
+    hh_excess = (rho * ss * _outer(h3, h3_o)
+                 + 0.5 * (_outer(h4, hh_o) * va + _outer(hh, h4_o) * vb))
+    g_curve = 0.5 * (_outer(h3, g_o) * va + _outer(g, h3_o) * vb)
+    hh_sq = _outer(hh, hh_o) * vv / f - hh_excess * vv / f3  # h''_c h''_d v_c v_d
+    linear = _outer(g, g_o) * ss - g_curve * ss / f - rho * hh_sq
+    quadratic = 0.5 * hh_sq * k / (k - 1.0)
+    if noise is not None and noise.third_moment is not None:
+        # Skewed noise: E[h(R)] carries ⅙ h''' μ₃ and E[h''(R) v̂] carries h''' μ₃
+        # (Cov(R, v̂) = μ₃ of the mean), so the term above is biased by −⅓ h''' μ₃;
+        # k̂₃ is unbiased for μ₃. Its own variance, 6 v³ / ((K − 1)(K − 2)) for
+        # Gaussian seeds, scaled by (⅓ h''')², joins the quadratic part.
+        k3 = np.asarray(noise.third_moment, np.float64)
+        if k3.shape != r.shape:
+            raise MetricInputError(f"third moment {k3.shape} differs from {r.shape}")
+        terms = terms + h3 * k3 / 3.0
+        k3_sd = np.sqrt(6.0 * v**3 / ((k - 1.0) * (k - 2.0) * _triple_ratio(k, 1.0)))
+        quadratic = quadratic + _outer(h3 / 3.0 * k3_sd, h3_o / 3.0 * k3_sd)
+        # The plug-ins correlate with the variance estimates they multiply:
+        # Cov(η, v̂) = μ₃, so E[g(R)² v̂] carries 2 g h'' μ₃ and E[h''(R)² v̂²]
+        # 4 h'' h''' v μ₃ (their sign follows the bias: ±10 % of a texel's variance at
+        # 10 % Poisson noise). μ₃ is taken as κ v² / T (NoiseStructure.skew_ratio);
+        # with channels carrying the same photons (η_c = a_c ξ) the mixed moments
+        # are products of the channels' cube roots q = ∛μ₃.
+        lit = r > 0
+        f_own = 1.0 + 2.0 / (k - 1.0)  # E[v̂²] / v² of one channel
+        q = np.cbrt(np.where(lit, noise.skew_ratio * v * v
+                             / (np.where(lit, r, 1.0) * f_own), 0.0))
+        qa, qb = q[..., :, None], q[..., None, :]
+        g_skew = _outer(g, hh_o) * qa * qb * qb + _outer(hh, g_o) * qa * qa * qb
+        hh_skew = (_outer(hh, h3_o) * (va * qb**3 + vb * qb * qa * qa)
+                   + _outer(h3, hh_o) * (vb * qa**3 + va * qa * qb * qb)) / f
+        linear = linear - g_skew + rho * hh_skew
+        quadratic = quadratic - 0.5 * hh_skew * k / (k - 1.0)
+    if other is None:
+        # A variance: where R's noise is so large that the corrections exceed the
+        # plug-in (about 1.5 % of the texels at 10 % relative noise) the part is 0.
+        quadratic = np.maximum(quadratic, 0.0)
+    return terms, linear, quadratic
 
 
 def _channel_rho(channels: int, rho: float) -> np.ndarray:
@@ -384,28 +503,8 @@ def relmse_variance_terms(method, reference, variance, *, seeds: int,
     baseline = _w(r, epsilon) * v + _d2w(r, epsilon) * v * v * (k - 1.0) / (k + 1.0)
 
     if independent is None:
-        h, g, hh, h4 = _h_derivatives(m, r, epsilon)
-        # Second order removes ½ h'' v; the fourth-order remainder, E[h(R)] −
-        # E[½ h''(R) v̂] − h(T) = (1/24 − 1/4) h · 3v²/3 = −⅛ h v² (Gaussian
-        # μ₄ = 3v²), is added back with E[v̂²] = v² (K + 1)/(K − 1).
-        terms = h - 0.5 * hh * v + 0.125 * h4 * v * v * (k - 1.0) / (k + 1.0)
-        h3 = _h3(m, r, epsilon)
-        gg = g[..., :, None] * g[..., None, :]
-        hhhh = hh[..., :, None] * hh[..., None, :]
-        linear = gg * ss - rho * hhhh * vv / f
-        quadratic = 0.5 * hhhh * vv * k / ((k - 1.0) * f)
-        if noise is not None and noise.third_moment is not None:
-            # Skewed noise: E[h(R)] carries ⅙ h''' μ₃ and E[h''(R) v̂] carries h''' μ₃
-            # (Cov(R, v̂) = μ₃ of the mean), so the term above is biased by −⅓ h''' μ₃;
-            # k̂₃ is unbiased for μ₃. Its own variance, 6 v³ / ((K − 1)(K − 2)) for
-            # Gaussian seeds, scaled by (⅓ h''')², joins the quadratic part (channels
-            # correlated as ρ², like the other squared terms).
-            k3 = np.asarray(noise.third_moment, np.float64)
-            if k3.shape != r.shape:
-                raise MetricInputError(f"third moment {k3.shape} differs from {r.shape}")
-            terms = terms + h3 * k3 / 3.0
-            t3 = h3 / 3.0 * np.sqrt(6.0 * v**3 / ((k - 1.0) * (k - 2.0)))
-            quadratic = quadratic + t3[..., :, None] * t3[..., None, :]
+        terms, linear, quadratic = _taylor_parts(m, r, v, k=k, rho=rho,
+                                                 epsilon=epsilon, noise=noise)
         dof = seeds - 1
     else:
         if independent_variance is None:
@@ -446,6 +545,32 @@ def relmse_variance_terms(method, reference, variance, *, seeds: int,
     texel_linear = np.einsum("...cd,cd->...", linear, rho)
     texel_quadratic = np.einsum("...cd,cd->...", quadratic, rho2)
     return terms, (texel_linear, texel_quadratic), baseline, dof
+
+
+def relmse_covariance(method_a, method_b, reference, variance, *, seeds: int, mask,
+                      channel_correlation: float = 1.0,
+                      epsilon: float = RELMSE_EPSILON) -> float:
+    """Model covariance of the one-reference excesses of two method images scored
+    against the same reference over ``mask`` (squared relMSE units): the standard
+    error model of :func:`excess_relative_mse` with one method's coefficients on each
+    side, without the per-seed maps' terms and before the floors that keep a variance
+    positive. Its diagonal is the squared standard error of texels taken as
+    independent and noise as symmetric."""
+    a = np.asarray(method_a, np.float64)
+    b = np.asarray(method_b, np.float64)
+    r = np.asarray(reference, np.float64)
+    v = np.asarray(variance, np.float64)
+    sel = np.asarray(mask, bool)
+    if not a.shape == b.shape == r.shape == v.shape or r.ndim != 3 or sel.shape != r.shape[:2]:
+        raise MetricInputError(f"expected equal (H, W, C) arrays and an (H, W) mask, got "
+                               f"{a.shape}, {b.shape}, {r.shape}, {v.shape}, {sel.shape}")
+    if seeds < 2:
+        raise MetricInputError(f"a variance needs at least 2 seeds, got {seeds}")
+    rho = _channel_rho(r.shape[2], channel_correlation)
+    _, linear, quadratic = _taylor_parts(a[sel], r[sel], v[sel], k=float(seeds), rho=rho,
+                                         epsilon=epsilon, noise=None, other=b[sel])
+    total = (np.einsum("ncd,cd->", linear, rho) + np.einsum("ncd,cd->", quadratic, rho * rho))
+    return float(total) / float(r[sel].size) ** 2
 
 
 def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
@@ -512,17 +637,14 @@ def excess_relative_mse(method, reference, variance, *, seeds: int, mask=None,
         r = np.asarray(reference, np.float64)
         _, g, hh, _ = _h_derivatives(m, r, epsilon)
         cross_linear, cross_quadratic = _neighbour_variance(
-            g, hh, np.asarray(variance, np.float64), sel, noise=noise,
+            g, hh, _h3(m, r, epsilon), np.asarray(variance, np.float64), sel, noise=noise,
             rho=_channel_rho(r.shape[2], channel_correlation), k=float(seeds))
     # The linear part's plug-in correction assumes the stated channel correlation; if
     # the channels are in fact less correlated it overshoots and the part's sum goes
-    # negative, about −100 % of the quadratic part for a wrong ρ = 1 at b = 0. Even a
-    # correct one is slightly negative near b = 0: its subtraction h''(R)² v̂² is
-    # inflated by R's noise like the quadratic part (by ~72 v/T²), about −10 % of the
-    # quadratic part at 10 % relative noise, which that part's own inflation offsets.
-    # So the sum (not each texel, which would bias a correct specification upwards) is
-    # floored at −½ of the quadratic part: a correct ρ keeps the offset, a wrong ρ = 1
-    # keeps half the quadratic part's (then overstated) variance rather than none.
+    # negative, about −100 % of the quadratic part for a wrong ρ = 1 at b = 0; with a
+    # correct one it is about 0 there. So the sum (not each texel, which would bias a
+    # correct specification upwards) is floored at −½ of the quadratic part: a wrong
+    # ρ = 1 keeps half the quadratic part's (then overstated) variance rather than none.
     texel_var = linear[sel] + quadratic[sel]
     quadratic_total = float(quadratic[sel].sum()) + cross_quadratic
     total = (max(float(linear[sel].sum()) + cross_linear, -0.5 * quadratic_total)

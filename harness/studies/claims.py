@@ -45,10 +45,10 @@ h(x) = w(x) (M − x)², w(x) = 1 / (x² + ε) (the taylor estimator of
 
     Cov(t₁, t_N) = ρ α₁ α_N σ σ' + ρ² · 2 β₁ β_N v v' K / (K − 1),
 
-with the plug-in corrections of that module (α(R) α'(R) overstates α α' by
-ρ h'' h'' v v' / (1 + 2ρ² / (K − 1)) in expectation); for one method this is exactly
-that module's variance, and the correlation r of (e₁, e_N) is the cross term over
-the square root of the two. With V₁, V_N the excesses' squared standard errors and
+with that module's second-order corrections of the plug-in coefficients
+(:func:`harness.metrics.excess.relmse_covariance`, which for one method is that
+module's variance of independent texels); the correlation r of (e₁, e_N) is the cross
+term over the square root of the two. With V₁, V_N the excesses' squared standard errors and
 C = r √(V₁ V_N), Fieller's interval is the set of ratios ρ* for which
 e₁ − ρ* e_N is within t √(V₁ − 2 ρ* C + ρ*² V_N) of 0 (t: Student's quantile at
 the smaller of the two Satterthwaite degrees of freedom): the roots of
@@ -105,7 +105,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import stdtrit
 
-from harness.metrics.excess import ExcessError, excess_relative_mse
+from harness.metrics.excess import ExcessError, excess_relative_mse, relmse_covariance
 from harness.metrics.scores import RELMSE_EPSILON, MetricInputError
 from harness.raycast import ReceiverTracer
 from harness.studies.convergence import classify
@@ -306,45 +306,6 @@ class ExcessRatio:
     correlation: float
 
 
-def _weight_terms(method: np.ndarray, reference: np.ndarray, epsilon: float):
-    """h'(R) and h''(R) of h(x) = w(x) (M − x)², w = 1 / (x² + ε) (Leibniz, with
-    w' = −2x / (x² + ε)², w'' = (6x² − 2ε) / (x² + ε)³)."""
-    x2 = reference * reference + epsilon
-    w = 1.0 / x2
-    dw = -2.0 * reference / (x2 * x2)
-    d2w = (6.0 * reference * reference - 2.0 * epsilon) / (x2 * x2 * x2)
-    d = method - reference
-    return dw * d * d - 2.0 * w * d, d2w * d * d - 4.0 * dw * d + 2.0 * w
-
-
-def _excess_covariance(methods: tuple[np.ndarray, ...], reference: np.ndarray,
-                       variance: np.ndarray, *, seeds: int, mask: np.ndarray, rho: float,
-                       epsilon: float) -> np.ndarray:
-    """(P, P) model covariance of the taylor excesses of P method images against one
-    reference (module docstring, "Interval of the one-iteration ratio"): the
-    variance of :func:`harness.metrics.excess.excess_relative_mse` on the diagonal,
-    before its floor of the linear part at 0."""
-    r = np.asarray(reference, np.float64)[mask]
-    v = np.asarray(variance, np.float64)[mask]
-    channels = r.shape[-1]
-    k = float(seeds)
-    corr = np.full((channels, channels), float(rho))
-    np.fill_diagonal(corr, 1.0)
-    corr2 = corr * corr
-    f = 1.0 + 2.0 * corr2 / (k - 1.0)  # E[v̂_c v̂_c'] / (v_c v_c'), Gaussian
-    s = np.sqrt(v)
-    parts = [_weight_terms(np.asarray(m, np.float64)[mask], r, epsilon) for m in methods]
-    out = np.empty((len(methods), len(methods)))
-    for a, (g_a, h_a) in enumerate(parts):
-        for b, (g_b, h_b) in enumerate(parts):
-            linear = (np.einsum("nc,nd,cd->", g_a * s, g_b * s, corr)
-                      - np.einsum("nc,nd,cd->", h_a * v, h_b * v, corr2 / f))
-            quadratic = 0.5 * k / (k - 1.0) * np.einsum("nc,nd,cd->", h_a * v, h_b * v,
-                                                        corr2 / f)
-            out[a, b] = linear + quadratic
-    return out / float(r.size) ** 2
-
-
 def _fieller(num: float, den: float, *, v_num: float, v_den: float, cov: float,
              t: float) -> tuple[float, float]:
     """Hull of Fieller's interval for num / den intersected with [0, ∞) (module
@@ -407,8 +368,10 @@ def excess_ratio(method_one: np.ndarray, method_last: np.ndarray, reference: np.
                                      channel_correlation=channel_correlation,
                                      epsilon=epsilon, seed_estimates=seed_estimates)
                  for m in (method_one, method_last))
-    cov = _excess_covariance((method_one, method_last), reference, variance, seeds=seeds,
-                             mask=mask, rho=channel_correlation, epsilon=epsilon)
+    pair = (method_one, method_last)
+    cov = np.array([[relmse_covariance(x, y, reference, variance, seeds=seeds, mask=mask,
+                                       channel_correlation=channel_correlation,
+                                       epsilon=epsilon) for y in pair] for x in pair])
     scale = math.sqrt(cov[0, 0] * cov[1, 1]) if cov[0, 0] > 0 and cov[1, 1] > 0 else 0.0
     correlation = float(np.clip(cov[0, 1] / scale, -1.0, 1.0)) if scale > 0 else 0.0
     e1, en = one.excess, last.excess
