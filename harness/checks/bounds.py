@@ -51,7 +51,7 @@ from scenes.errors import HarnessError
 from scenes.schema import build, spec
 
 __all__ = ["MEASURES", "Bound", "ChecksFileError", "Gap", "Target", "check_locks", "holds",
-           "judge", "load_gaps", "load_locks", "load_targets"]
+           "judge", "load_gaps", "load_locks", "load_targets", "locked_quantity"]
 
 LOCK = "regression lock"
 #: What a lock's value is measured at, which differs from the comparison's own records.
@@ -233,24 +233,33 @@ def load_gaps(path: str | Path) -> tuple[Gap, ...]:
     return _load(path, _Gaps).gap
 
 
+def locked_quantity(record: MetricValue) -> tuple[float, tuple[float, float] | None]:
+    """What a lock on ``record`` holds, with its 95 % interval (None without one):
+    relMSE its excess; the flux ratio its value, the interval of its excess (ratio − 1)
+    moved back by 1; SSIM and FLIP their value (descriptive: no interval)."""
+    interval = (tuple(float(x) for x in record.excess_ci95)
+                if record.excess_ci95 is not None else None)
+    if record.metric == "relmse" and record.excess is not None:
+        return float(record.excess), interval
+    if record.metric == "flux_ratio" and record.excess is not None and interval is not None:
+        shift = float(record.value) - float(record.excess)
+        return float(record.value), (interval[0] + shift, interval[1] + shift)
+    return float(record.value), None
+
+
 def check_locks(scene: str, metrics: list[MetricValue] | tuple[MetricValue, ...],
                 bounds: tuple[Bound, ...]) -> tuple[Check, ...]:
-    """Check every lock of ``scene`` against its metric; a missing metric fails. A
-    metric with an excess (relMSE) is locked on the excess and judged from its 95 %
-    interval (:func:`judge`: holds, fails or undecided); the others on the value."""
+    """Check every lock of ``scene`` against its metric; a missing metric fails. Each
+    is judged from the 95 % interval of its locked quantity where it has one
+    (:func:`locked_quantity`, :func:`judge`: holds, fails or undecided), else from the
+    value."""
     records = {(m.view, m.region, m.metric): m for m in metrics}
     checks = []
     for b in bounds:
         if b.scene != scene:
             continue
         record = records.get((b.view, b.region, b.metric))
-        value, interval = float("nan"), None
-        if record is not None and record.excess is not None:
-            value = float(record.excess)
-            interval = tuple(float(x) for x in record.excess_ci95) \
-                if record.excess_ci95 is not None else None
-        elif record is not None:
-            value = float(record.value)
+        value, interval = (float("nan"), None) if record is None else locked_quantity(record)
         verdict = judge(b.kind, b.bound, value, interval)
         # A lock is measured at other settings than the comparison's: its label says so,
         # so its relMSE is not read as the page's number for the same name.

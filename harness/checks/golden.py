@@ -12,7 +12,11 @@ They serve two checks (see :mod:`harness.checks`):
 Layout of the golden folder (bundled: ``harness/checks/data/golden/``)::
 
     manifest.json            settings, versions, and per scene: photons per seed,
-                             seeds, first seed, relative noise, the scale of each map
+                             seeds, first seed, relative noise, the scale of each map,
+                             each map's K per-seed totals ``seed_luminance`` (Σ over
+                             the texels of the seed's luminance, W/m²: the flux
+                             ratio's interval, since a stratified launch's total is far
+                             less noisy than the sum of its texels' variances says)
                              and the SHA-256 of every file
     <scene>/receiver<i>.exr  half-float layers, both divided by the map's ``scale``:
                              RGB   = mean caustic irradiance E (W/m²)
@@ -57,6 +61,7 @@ from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.reference import estimate_receivers
 from renderers.results import ReceiverMap
 from scenes import Scene, load_scene, with_settings
+from scenes.colour import LUMA
 from scenes.errors import HarnessError
 from scenes.files import atomic_write_bytes, dumps_strict
 
@@ -64,7 +69,7 @@ __all__ = ["FRESH_SEEDS", "GOLDEN_SCENES", "GOLDEN_SETTINGS", "REGION_SEEDS", "G
            "GoldenError", "fresh_reference", "golden_scene", "load_golden", "read_manifest",
            "regenerate"]
 
-FORMAT = 3
+FORMAT = 4
 #: Paper scenes with golden references.
 GOLDEN_SCENES = ("glass_sphere", "bunny", "colored_bunny", "dispersion_sphere", "water_pool",
                  "seabed", "metal_ring")
@@ -96,12 +101,14 @@ class GoldenError(HarnessError):
 class Golden:
     """One scene's golden receiver maps (variance = that of the stored mean, rounding
     included), each receiver's caustic region (H, W) bool from the independent
-    reference, and its manifest entry."""
+    reference, each receiver's (K,) per-seed luminance totals (W/m² summed over the
+    texels), and its manifest entry."""
 
     scene: str
     receivers: tuple[ReceiverMap, ...]
     entry: dict
     regions: tuple[np.ndarray, ...] = ()
+    seed_luminance: tuple[np.ndarray, ...] = ()
 
     @property
     def photons(self) -> int:
@@ -168,7 +175,24 @@ def load_golden(golden_dir: Path, name: str) -> Golden:
         if regions[-1].shape != stored.shape[:2]:
             raise GoldenError(f"{region}: {regions[-1].shape} texels, the map has "
                               f"{stored.shape[:2]}")
-    return Golden(name, tuple(receivers), entry, tuple(regions))
+    return Golden(name, tuple(receivers), entry, tuple(regions),
+                  _seed_luminance(golden_dir, name, entry, len(receivers)))
+
+
+def _seed_luminance(golden_dir: Path, name: str, entry: dict, receivers: int):
+    """The entry's per-seed luminance totals, K finite numbers per receiver, or
+    GoldenError naming the manifest, the scene and the field."""
+    totals = entry.get("seed_luminance")
+    where = f"{golden_dir / 'manifest.json'}: {name}: seed_luminance"
+    try:
+        arrays = tuple(np.asarray(t, np.float64) for t in totals)
+    except (TypeError, ValueError):
+        raise GoldenError(f"{where}: missing or not lists of numbers") from None
+    seeds = int(entry["seeds"])
+    if len(arrays) != receivers or any(a.shape != (seeds,) or not np.isfinite(a).all()
+                                       for a in arrays):
+        raise GoldenError(f"{where}: expected {receivers} lists of {seeds} finite totals")
+    return arrays
 
 
 def _checked(golden_dir: Path, entry: dict, rel: str) -> Path:
@@ -209,10 +233,13 @@ def _render(scene: Scene, out: Path, rel_dir: str) -> dict:
     estimate = estimate_receivers(scene, target_noise=1e-12, caustic_only=True)
     seconds = time.perf_counter() - start
     hashes, scales = {}, []
+    totals = []
     for i, rmap in enumerate(estimate.caustic):
         rel = f"{rel_dir}/receiver{i}.exr"
         scales.append(_write_half(out / rel, rmap.irradiance, rmap.variance))
         hashes[rel] = _sha256(out / rel)
+        per_seed = np.asarray(rmap.seed_maps, np.float64) @ LUMA  # (K, H, W)
+        totals.append([float(x) for x in per_seed.sum(axis=(1, 2))])
     s = scene.settings
     # The region from an independent reference (module docstring).
     region_seed = s.seed + REGION_SEED_OFFSET
@@ -229,7 +256,8 @@ def _render(scene: Scene, out: Path, rel_dir: str) -> dict:
             "region_seed": region_seed, "region_seeds": REGION_SEEDS,
             "relative_noise": estimate.relative_noise, "seconds": seconds,
             "receiver_extent": [list(m.extent) for m in estimate.caustic],
-            "resolution": list(s.receiver_map), "scale": scales, "sha256": hashes,
+            "resolution": list(s.receiver_map), "scale": scales, "seed_luminance": totals,
+            "sha256": hashes,
             "caustic_only": True, "versions": mitsuba_versions()}
 
 

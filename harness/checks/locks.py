@@ -10,9 +10,11 @@ comparison's own estimator), SSIM (tone-mapped) and FLIP over the scene's causti
 region (the golden's ``region<i>.png``, thresholded on an independent reference, as
 every comparison thresholds it), and the total-flux ratio over the whole map, locked
 from above and from below (a lock guards today's value, which need not be 1: a change
-toward 1 is a change too). The excess lock is judged from its interval (holds, fails
-or undecided: :func:`harness.checks.bounds.judge`); the others from the value. The
-render is deterministic on one machine; what varies is
+toward 1 is a change too). The excess and flux-ratio locks are judged from their 95 %
+intervals (holds, fails or undecided: :func:`harness.checks.bounds.judge`; the flux
+ratio's from the reference's per-seed totals, the golden's ``seed_luminance``); SSIM
+and FLIP, descriptive measures (``docs/statistics.md``), from the value. The render
+is deterministic on one machine; what varies is
 
 * the reference: calibration scores the render against the golden reference and
   against ``extra`` independent references (disjoint seeds, the golden budget);
@@ -28,6 +30,7 @@ The bound is then
                           largest upper end of the excess's interval)
     min (SSIM):           worst − max(3σ, 3Δ, 5 % of (1 − worst))
     flux ratio:           highest + max(3σ, 3Δ, 0.005) and lowest − max(3σ, 3Δ, 0.005)
+                          (the highest upper and the lowest lower end of its interval)
 
 with "worst" the least favourable value over references and jitters: a bound that
 reference noise and benign rounding cannot break, and that a real change (splats
@@ -43,7 +46,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.checks.bounds import Bound, check_locks
+from harness.checks.bounds import Bound, check_locks, locked_quantity
 from harness.checks.golden import (
     GOLDEN_SETTINGS,
     Golden,
@@ -54,12 +57,14 @@ from harness.checks.golden import (
 from harness.checks.targets import caustic_relmse
 from harness.compare.evaluate import exposure_for, score_value
 from harness.compare.scoring import channel_correlation
+from harness.compare.uncertainty import flux_ratio_interval
 from renderers.caustics_mapping import render
 from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.reference import estimate_receivers
 from renderers.results import ReceiverMap
 from reports.records import MetricValue
 from scenes import Scene, with_settings
+from scenes.colour import LUMA
 from scenes.files import atomic_write_bytes
 
 __all__ = ["JITTER", "LOCKED_METHODS", "LOCKED_METRICS", "accuracy_metrics", "calibrate",
@@ -84,8 +89,11 @@ def realtime_maps(scene: Scene, *, ctx=None) -> list[np.ndarray]:
 
 
 def accuracy_metrics(test_maps, references, regions, *, seeds: int,
-                     channel_correlation: float = 1.0) -> list[MetricValue]:
-    """The locked metrics of each receiver map against its reference (each once).
+                     channel_correlation: float = 1.0,
+                     seed_luminance=None) -> list[MetricValue]:
+    """The locked metrics of each receiver map against its reference (each once): the
+    caustic relMSE's excess and the full map's flux ratio with their 95 % intervals,
+    SSIM and FLIP as values.
 
     Parameters
     ----------
@@ -97,6 +105,9 @@ def accuracy_metrics(test_maps, references, regions, *, seeds: int,
         The scene's caustic region of each receiver (the golden's ``region<i>.png``).
     channel_correlation : float
         1 when the same photons carry all three channels, 0 for one pass per channel.
+    seed_luminance : list of ndarray (K,), optional
+        Each reference's per-seed luminance totals over its map (the golden's
+        ``seed_luminance``); default: from each reference's ``seed_maps``.
     """
     values = []
     for i, (method, reference, region) in enumerate(zip(test_maps, references, regions,
@@ -111,17 +122,35 @@ def accuracy_metrics(test_maps, references, regions, *, seeds: int,
                     regions_of[name], seeds=seeds, channel_correlation=channel_correlation,
                     view=f"receiver{i}"))
                 continue
+            if metric == "flux_ratio":
+                totals = (seed_luminance[i] if seed_luminance is not None else
+                          (np.asarray(reference.seed_maps, np.float64) @ LUMA).sum(axis=(1, 2)))
+                values.append(_flux_record(method, ref, totals, view=f"receiver{i}"))
+                continue
             values.append(MetricValue(f"receiver{i}", name, metric, score_value(
                 metric, method, ref, mask=regions_of[name], exposure=exposure),
                 pixels=int(regions_of[name].sum())))
     return values
 
 
+def _flux_record(method, reference, seed_totals, *, view: str) -> MetricValue:
+    """The full map's flux ratio of ``method`` against ``reference`` with its interval
+    from the reference's K per-seed luminance totals (the comparison's estimator,
+    :func:`harness.compare.uncertainty.flux_ratio_interval`)."""
+    m = float((np.asarray(method, np.float64) @ LUMA).sum())
+    r = float((np.asarray(reference, np.float64) @ LUMA).sum())
+    ratio = m / r if r > 0 else float("nan")
+    fields = flux_ratio_interval(ratio, r, seed_totals) if r > 0 else {}
+    return MetricValue(view, "full", "flux_ratio", ratio,
+                       pixels=int(np.prod(np.shape(reference)[:2])), **fields)
+
+
 def golden_metrics(scene: Scene, maps, golden: Golden) -> list[MetricValue]:
     """:func:`accuracy_metrics` of ``maps`` against ``golden`` over its regions."""
     return accuracy_metrics(maps, list(golden.receivers), list(golden.regions),
                             seeds=int(golden.entry["seeds"]),
-                            channel_correlation=channel_correlation(scene))
+                            channel_correlation=channel_correlation(scene),
+                            seed_luminance=list(golden.seed_luminance))
 
 
 def _lock_name(scene: str, method: str) -> str:
@@ -167,13 +196,13 @@ def jittered(scene: Scene, offset) -> Scene:
     return dataclasses.replace(scene, light=dataclasses.replace(light, direction=turned))
 
 
-def _locked(value: MetricValue) -> tuple[float, float]:
-    """The locked number of a metric record and the end of its interval a lock from
-    above must keep: the excess and its upper end where it has one, else the value."""
-    if value.excess is not None:
-        high = value.excess_ci95[1] if value.excess_ci95 is not None else value.excess
-        return float(value.excess), float(high)
-    return float(value.value), float(value.value)
+def _locked(value: MetricValue) -> tuple[float, float, float]:
+    """The locked number of a metric record and its 95 % interval (low, high)
+    (:func:`harness.checks.bounds.locked_quantity`; the number itself at both ends
+    where it has none)."""
+    number, interval = locked_quantity(value)
+    low, high = interval if interval is not None else (number, number)
+    return number, low, high
 
 
 def _bound(metric: str, kind: str, values: np.ndarray, jitter: float) -> tuple[float, float]:
@@ -207,9 +236,11 @@ def calibrate(scenes_dir: Path, golden_dir: Path, names, *, extra: int = 3,
             references.append(list(estimate.caustic))
         rho = channel_correlation(scene)
 
-        def metrics(maps, reference, rho=rho, golden=golden):
+        def metrics(maps, reference, rho=rho, golden=golden, first=references[0]):
+            # The golden's totals are in its manifest; the others' in their seed maps.
+            totals = list(golden.seed_luminance) if reference is first else None
             return accuracy_metrics(maps, reference, list(golden.regions), seeds=k,
-                                    channel_correlation=rho)
+                                    channel_correlation=rho, seed_luminance=totals)
 
         for method in methods:
             configured = with_settings(scene, {"preset": method})
@@ -223,14 +254,14 @@ def calibrate(scenes_dir: Path, golden_dir: Path, names, *, extra: int = 3,
                 locked = np.array([_locked(run[j]) for run in runs], float)
                 moved = np.array([_locked(run[j]) for run in jitters], float)
                 delta = float(np.max(np.abs(moved[:, 0] - locked[0, 0])))
-                # A lock from above keeps the intervals' upper ends (the value itself
-                # where there is no interval); from below the values.
-                values, moved = locked[:, 1], moved[:, 1]
+                # A lock from above keeps the intervals' upper ends, from below their
+                # lower ends (the value itself where there is no interval).
                 for kind in (kd for reg, met, kd in LOCKED_METRICS
                              if (reg, met) == (first.region, first.metric)):
-                    bounds.append(_lock(name, method, first, kind=kind, values=values,
-                                        moved=moved, delta=delta,
-                                        extra=extra, today=today, v=v))
+                    end = 2 if kind == "max" else 1
+                    bounds.append(_lock(name, method, first, kind=kind,
+                                        values=locked[:, end], moved=moved[:, end],
+                                        delta=delta, extra=extra, today=today, v=v))
             progress(f"{name} ({method}): {len(bounds)} locks so far")
     return bounds
 
@@ -239,7 +270,9 @@ def _lock(name, method, first, *, kind, values, moved, delta, extra, today, v) -
     bound, worst = _bound(first.metric, kind, np.concatenate([values, moved]), delta)
     margin = "max(3 sd, 3 jitter, 0.005)" if first.metric == "flux_ratio" else \
         "max(3 sd, 3 jitter, 5 %)"
-    what = "excess relMSE's 95 % upper ends" if first.excess is not None else "values"
+    end = "upper" if kind == "max" else "lower"
+    what = {"relmse": f"excess relMSE's 95 % {end} ends",
+            "flux_ratio": f"flux ratio's 95 % {end} ends"}.get(first.metric, "values")
     provenance = (
         f"{len(values)} references (golden + {extra} disjoint seeds), {what}: "
         f"{values.min():.4g}..{values.max():.4g}, sd {values.std():.2g}; light "

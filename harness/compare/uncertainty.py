@@ -66,7 +66,7 @@ from harness.metrics.baselines import (
 from harness.metrics.excess import excess_relative_mse, t_interval
 from scenes.colour import LUMA
 
-__all__ = ["BASELINE_TRIALS", "ExcessInputs", "metric_excess"]
+__all__ = ["BASELINE_TRIALS", "ExcessInputs", "flux_ratio_interval", "metric_excess"]
 
 #: Simulated noisy references per perceptual baseline: SSIM is cheap (0.25 s at 512²
 #: here), FLIP is not (3.7 s at 512², 1.3 s at 256² on this 2-core machine).
@@ -174,6 +174,20 @@ def _perceptual(metric: str, value_map: np.ndarray, reference: np.ndarray, mask:
             **_interval(excess, math.hypot(float(boot.std(ddof=1)), monte_carlo))}
 
 
+def flux_ratio_interval(ratio: float, reference_total: float, seed_totals) -> dict:
+    """``baseline`` 1 and the :func:`_interval` fields of ratio − 1 from the K seeds'
+    totals S_k of the reference (the same sums as ``reference_total``, luminance over
+    the region): SE = ratio · √(s²(S_k) / K) / ``reference_total``, Student t with
+    K − 1 degrees of freedom (:func:`_flux_ratio`)."""
+    totals = np.asarray(seed_totals, np.float64).ravel()
+    if totals.size < 2 or not np.isfinite(totals).all() or reference_total <= 0:
+        raise MetricInputError(f"a flux ratio's interval needs at least 2 finite seed "
+                               f"totals and a lit reference, got {totals.size} totals, "
+                               f"reference total {reference_total:g}")
+    stderr = ratio * math.sqrt(float(totals.var(ddof=1)) / totals.size) / reference_total
+    return {"baseline": 1.0, **_interval(ratio - 1.0, stderr, dof=totals.size - 1)}
+
+
 def _flux_ratio(method: np.ndarray, reference: np.ndarray, mask: np.ndarray,
                 inputs: ExcessInputs) -> dict:
     """ratio − 1 with the delta method's standard error, ratio = ΣL(M) / ΣL(R) with L
@@ -192,9 +206,7 @@ def _flux_ratio(method: np.ndarray, reference: np.ndarray, mask: np.ndarray,
     dof = max(inputs.seeds - 1, 1)
     if inputs.seed_estimates is not None:
         totals = np.asarray(inputs.seed_estimates, np.float64)[:, mask] @ LUMA  # (K, n)
-        totals = totals.sum(axis=1)
-        stderr = ratio * math.sqrt(float(totals.var(ddof=1)) / totals.size) / r
-        return {"baseline": 1.0, **_interval(ratio - 1.0, stderr, dof=totals.size - 1)}
+        return flux_ratio_interval(ratio, r, totals.sum(axis=1))
     sigma = np.sqrt(np.maximum(np.asarray(inputs.variance, np.float64)[mask], 0.0)) * LUMA
     rho = inputs.channel_correlation
     texel = rho * sigma.sum(axis=1) ** 2 + (1.0 - rho) * (sigma**2).sum(axis=1)

@@ -27,6 +27,7 @@ from harness.checks.golden import (
 from harness.checks.ztest import write_failure_images, z_test
 from renderers.exr import read_exr
 from scenes import effects_of
+from scenes.colour import LUMA
 from tests.conftest import SCENES
 
 # ---- the Z-test on synthetic data ----------------------------------------------------
@@ -162,7 +163,7 @@ def test_missing_or_unreadable_golden_files_are_errors_naming_them(tmp_path):
     with pytest.raises(GoldenError, match=r"manifest\.json: unreadable manifest"):
         read_manifest(tmp_path)
     (tmp_path / "manifest.json").write_text(json.dumps({"format": 1, "scenes": {}}))
-    with pytest.raises(GoldenError, match="format 1, expected 3"):
+    with pytest.raises(GoldenError, match="format 1, expected 4"):
         read_manifest(tmp_path)
     copy = tmp_path / "golden"
     shutil.copytree(GOLDEN_DIR, copy)
@@ -179,6 +180,34 @@ def test_missing_or_unreadable_golden_files_are_errors_naming_them(tmp_path):
         load_golden(copy, "glass_sphere")
     with pytest.raises(GoldenError, match="no golden reference for nowhere"):
         load_golden(copy, "nowhere")
+
+
+def test_golden_per_seed_totals_are_checked(tmp_path):
+    """The flux ratio's interval rests on each map's K per-seed luminance totals in the
+    manifest: a missing field, a wrong count or a non-finite total is a GoldenError
+    naming the manifest, the scene and the field. The bundled ones are K = 16 totals
+    per receiver whose mean is the stored map's total within its half-float rounding
+    (2^-11 relative, bound 1e-3)."""
+    golden = load_golden(GOLDEN_DIR, "seabed")
+    assert [t.shape for t in golden.seed_luminance] == [(16,), (16,)]
+    for rmap, totals in zip(golden.receivers, golden.seed_luminance, strict=True):
+        stored = float((np.asarray(rmap.irradiance, np.float64) @ LUMA).sum())
+        assert totals.mean() == pytest.approx(stored, rel=1e-3)
+    copy = tmp_path / "golden"
+    shutil.copytree(GOLDEN_DIR, copy)
+    manifest = json.loads((copy / "manifest.json").read_text())
+    entry = manifest["scenes"]["bunny"]
+    for broken, message in ((None, "missing or not lists"),
+                            ([entry["seed_luminance"][0][:15]], "expected 1 lists of 16 finite"),
+                            ([[float("nan")] * 16], "expected 1 lists of 16 finite")):
+        if broken is None:
+            entry.pop("seed_luminance", None)
+        else:
+            entry["seed_luminance"] = broken
+        (copy / "manifest.json").write_text(json.dumps(manifest))
+        with pytest.raises(GoldenError, match=rf"manifest\.json: bunny: seed_luminance: "
+                                              rf"{message}"):
+            load_golden(copy, "bunny")
 
 
 # ---- the photon tracer held to its golden references ----------------------------------

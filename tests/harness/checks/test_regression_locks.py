@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from harness.checks import LOCKS_FILE
-from harness.checks.bounds import load_locks
+from harness.checks.bounds import load_locks, locked_quantity
 from harness.checks.golden import GOLDEN_SCENES, golden_scene
 from harness.checks.locks import LOCKED_METHODS, golden_metrics, lock_checks, realtime_maps
 from harness.checks.ztest import write_failure_images
@@ -136,7 +136,8 @@ def test_accuracy_metrics_are_the_locked_ones(golden_renders):
     """Four metrics per receiver, in the order of ``LOCKED_METRICS``, over the golden's
     regions (the independent reference's, not the golden's own: they differ, and the
     caustic records count the region's texels); the relMSE carries its excess and
-    interval."""
+    interval, the flux ratio its interval from the golden's per-seed totals, which a
+    lock judges on the ratio itself (the excess ratio − 1 moved back by 1)."""
     golden = golden_renders.golden("seabed")
     values = golden_metrics(golden_renders.scene("seabed", "paper"),
                             golden_renders.maps("seabed", "paper"), golden)
@@ -151,4 +152,10 @@ def test_accuracy_metrics_are_the_locked_ones(golden_renders):
     relmse = values[0]
     assert relmse.excess is not None and relmse.excess_ci95[0] < relmse.excess \
         < relmse.excess_ci95[1]
+    flux = values[3]
+    assert flux.excess == pytest.approx(flux.value - 1.0)
+    value, (low, high) = locked_quantity(flux)
+    assert value == flux.value and low < value < high
+    # SSIM and FLIP are descriptive: a lock judges their value alone.
+    assert locked_quantity(values[1]) == (values[1].value, None)
     assert len(values) == 8
