@@ -116,7 +116,6 @@ from harness.metrics.scores import RELMSE_EPSILON, MetricInputError, relative_ms
 __all__ = ["CONFIDENCE", "ExcessError", "excess_relative_mse", "relmse_covariance",
            "relmse_variance_terms", "t_interval"]
 
-
 #: Two-sided confidence of the reported interval.
 CONFIDENCE = 0.95
 
@@ -496,10 +495,6 @@ def relmse_variance_terms(method, reference, variance, *, seeds: int,
     k = float(seeds)
     rho = _channel_rho(r.shape[2], channel_correlation)
     rho2 = rho * rho
-    f = 1.0 + 2.0 * rho2 / (k - 1.0)  # E[v̂_c v̂_c'] / (v_c v_c'), Gaussian
-    vv = v[..., :, None] * v[..., None, :]
-    s = np.sqrt(v)
-    ss = s[..., :, None] * s[..., None, :]
     baseline = _w(r, epsilon) * v + _d2w(r, epsilon) * v * v * (k - 1.0) / (k + 1.0)
 
     if independent is None:
@@ -507,6 +502,8 @@ def relmse_variance_terms(method, reference, variance, *, seeds: int,
                                                  epsilon=epsilon, noise=noise)
         dof = seeds - 1
     else:
+        f = 1.0 + 2.0 * rho2 / (k - 1.0)  # E[v̂_c v̂_c'] / (v_c v_c'), Gaussian
+        vv, ss = _outer(v), _outer(np.sqrt(v))
         if independent_variance is None:
             raise MetricInputError("an independent reference needs its variance too")
         r2 = np.asarray(independent, np.float64)
