@@ -73,7 +73,7 @@ is removed, μ₃ taken as κ v² / T with κ pooled over the region
 (:attr:`NoiseStructure.skew_ratio`; each texel's own k̂₃ is too noisy at K = 4 to
 multiply into a variance). What is left is the variance's own third order (about
 +20 v/T² at b = 0, Gaussian; in a one-texel simulation, model over true variance 0.97 to
-1.01 under Poisson and compound-Poisson noise at 5 and 10 %, 1.02 to 1.12 for
+1.01 under Poisson and compound-Poisson noise at 5 and 10 %, up to 1.12 for
 Gaussian noise at 10 %; docs/statistics.md).
 
 Texels and channels: the photon tracer deposits each photon in the one texel its
