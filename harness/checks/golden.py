@@ -56,12 +56,12 @@ import OpenEXR
 from PIL import Image
 
 from harness.compare.regions import scene_caustic_region
+from harness.compare.uncertainty import seed_luminance_totals
 from renderers.exr import ExrError, read_exr
 from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.reference import estimate_receivers
 from renderers.results import ReceiverMap
 from scenes import Scene, load_scene, with_settings
-from scenes.colour import LUMA
 from scenes.errors import HarnessError
 from scenes.files import atomic_write_bytes, dumps_strict
 
@@ -238,8 +238,7 @@ def _render(scene: Scene, out: Path, rel_dir: str) -> dict:
         rel = f"{rel_dir}/receiver{i}.exr"
         scales.append(_write_half(out / rel, rmap.irradiance, rmap.variance))
         hashes[rel] = _sha256(out / rel)
-        per_seed = np.asarray(rmap.seed_maps, np.float64) @ LUMA  # (K, H, W)
-        totals.append([float(x) for x in per_seed.sum(axis=(1, 2))])
+        totals.append([float(x) for x in seed_luminance_totals(rmap.seed_maps)])
     s = scene.settings
     # The region from an independent reference (module docstring).
     region_seed = s.seed + REGION_SEED_OFFSET

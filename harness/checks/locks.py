@@ -57,14 +57,13 @@ from harness.checks.golden import (
 from harness.checks.targets import caustic_relmse
 from harness.compare.evaluate import exposure_for, score_value
 from harness.compare.scoring import channel_correlation
-from harness.compare.uncertainty import flux_ratio_interval
+from harness.compare.uncertainty import flux_ratio_interval, seed_luminance_totals
 from renderers.caustics_mapping import render
 from renderers.mitsuba import mitsuba_versions
 from renderers.mitsuba.reference import estimate_receivers
 from renderers.results import ReceiverMap
 from reports.records import MetricValue
 from scenes import Scene, with_settings
-from scenes.colour import LUMA
 from scenes.files import atomic_write_bytes
 
 __all__ = ["JITTER", "LOCKED_METHODS", "LOCKED_METRICS", "accuracy_metrics", "calibrate",
@@ -122,27 +121,15 @@ def accuracy_metrics(test_maps, references, regions, *, seeds: int,
                     regions_of[name], seeds=seeds, channel_correlation=channel_correlation,
                     view=f"receiver{i}"))
                 continue
+            value = score_value(metric, method, ref, mask=regions_of[name], exposure=exposure)
+            fields = {}
             if metric == "flux_ratio":
-                totals = (seed_luminance[i] if seed_luminance is not None else
-                          (np.asarray(reference.seed_maps, np.float64) @ LUMA).sum(axis=(1, 2)))
-                values.append(_flux_record(method, ref, totals, view=f"receiver{i}"))
-                continue
-            values.append(MetricValue(f"receiver{i}", name, metric, score_value(
-                metric, method, ref, mask=regions_of[name], exposure=exposure),
-                pixels=int(regions_of[name].sum())))
+                totals = (seed_luminance[i] if seed_luminance is not None
+                          else seed_luminance_totals(reference.seed_maps))
+                fields = flux_ratio_interval(value, totals)
+            values.append(MetricValue(f"receiver{i}", name, metric, value,
+                                      pixels=int(regions_of[name].sum()), **fields))
     return values
-
-
-def _flux_record(method, reference, seed_totals, *, view: str) -> MetricValue:
-    """The full map's flux ratio of ``method`` against ``reference`` with its interval
-    from the reference's K per-seed luminance totals (the comparison's estimator,
-    :func:`harness.compare.uncertainty.flux_ratio_interval`)."""
-    m = float((np.asarray(method, np.float64) @ LUMA).sum())
-    r = float((np.asarray(reference, np.float64) @ LUMA).sum())
-    ratio = m / r if r > 0 else float("nan")
-    fields = flux_ratio_interval(ratio, r, seed_totals) if r > 0 else {}
-    return MetricValue(view, "full", "flux_ratio", ratio,
-                       pixels=int(np.prod(np.shape(reference)[:2])), **fields)
 
 
 def golden_metrics(scene: Scene, maps, golden: Golden) -> list[MetricValue]:
@@ -229,18 +216,18 @@ def calibrate(scenes_dir: Path, golden_dir: Path, names, *, extra: int = 3,
     for name in names:
         scene = golden_scene(scenes_dir, name)
         golden = load_golden(golden_dir, name)
-        references = [list(golden.receivers)]
+        # (maps, per-seed totals): the golden's totals are in its manifest, the
+        # others' in their seed maps.
+        references = [(list(golden.receivers), list(golden.seed_luminance))]
         for r in range(extra):
             other = with_settings(scene, {"seed": golden.entry["seed"] + k * (r + 1)})
             estimate = estimate_receivers(other, target_noise=1e-12, caustic_only=True)
-            references.append(list(estimate.caustic))
+            references.append((list(estimate.caustic), None))
         rho = channel_correlation(scene)
 
-        def metrics(maps, reference, rho=rho, golden=golden, first=references[0]):
-            # The golden's totals are in its manifest; the others' in their seed maps.
-            totals = list(golden.seed_luminance) if reference is first else None
-            return accuracy_metrics(maps, reference, list(golden.regions), seeds=k,
-                                    channel_correlation=rho, seed_luminance=totals)
+        def metrics(maps, reference, rho=rho, golden=golden):
+            return accuracy_metrics(maps, reference[0], list(golden.regions), seeds=k,
+                                    channel_correlation=rho, seed_luminance=reference[1])
 
         for method in methods:
             configured = with_settings(scene, {"preset": method})

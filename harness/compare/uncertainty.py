@@ -66,7 +66,8 @@ from harness.metrics.baselines import (
 from harness.metrics.excess import excess_relative_mse, t_interval
 from scenes.colour import LUMA
 
-__all__ = ["BASELINE_TRIALS", "ExcessInputs", "flux_ratio_interval", "metric_excess"]
+__all__ = ["BASELINE_TRIALS", "ExcessInputs", "flux_ratio_interval", "metric_excess",
+           "seed_luminance_totals"]
 
 #: Simulated noisy references per perceptual baseline: SSIM is cheap (0.25 s at 512²
 #: here), FLIP is not (3.7 s at 512², 1.3 s at 256² on this 2-core machine).
@@ -174,17 +175,26 @@ def _perceptual(metric: str, value_map: np.ndarray, reference: np.ndarray, mask:
             **_interval(excess, math.hypot(float(boot.std(ddof=1)), monte_carlo))}
 
 
-def flux_ratio_interval(ratio: float, reference_total: float, seed_totals) -> dict:
-    """``baseline`` 1 and the :func:`_interval` fields of ratio − 1 from the K seeds'
-    totals S_k of the reference (the same sums as ``reference_total``, luminance over
-    the region): SE = ratio · √(s²(S_k) / K) / ``reference_total``, Student t with
-    K − 1 degrees of freedom (:func:`_flux_ratio`)."""
+def seed_luminance_totals(seed_maps, mask=None) -> np.ndarray:
+    """(K,) S_k = Σ over ``mask``'s texels (default all) of seed k's luminance, for
+    per-seed maps (K, H, W, 3): the reference total's K independent estimates."""
+    x = np.asarray(seed_maps, np.float64)
+    if mask is not None:
+        x = x[:, np.asarray(mask, bool)]
+    luminance = x @ LUMA
+    return luminance.reshape(luminance.shape[0], -1).sum(axis=1)
+
+
+def flux_ratio_interval(ratio: float, seed_totals) -> dict:
+    """``baseline`` 1 and the :func:`_interval` fields of ratio − 1 from the reference's
+    K per-seed totals S_k (:func:`seed_luminance_totals`; their mean is the reference's
+    total): SE = ratio · √(s²(S_k) / K) / mean S_k, Student t with K − 1 degrees of
+    freedom (:func:`_flux_ratio`)."""
     totals = np.asarray(seed_totals, np.float64).ravel()
-    if totals.size < 2 or not np.isfinite(totals).all() or reference_total <= 0:
+    if totals.size < 2 or not np.isfinite(totals).all() or totals.mean() <= 0:
         raise MetricInputError(f"a flux ratio's interval needs at least 2 finite seed "
-                               f"totals and a lit reference, got {totals.size} totals, "
-                               f"reference total {reference_total:g}")
-    stderr = ratio * math.sqrt(float(totals.var(ddof=1)) / totals.size) / reference_total
+                               f"totals of a lit reference, got {totals.size} totals")
+    stderr = ratio * math.sqrt(float(totals.var(ddof=1)) / totals.size) / totals.mean()
     return {"baseline": 1.0, **_interval(ratio - 1.0, stderr, dof=totals.size - 1)}
 
 
@@ -205,8 +215,7 @@ def _flux_ratio(method: np.ndarray, reference: np.ndarray, mask: np.ndarray,
     ratio = m / r
     dof = max(inputs.seeds - 1, 1)
     if inputs.seed_estimates is not None:
-        totals = np.asarray(inputs.seed_estimates, np.float64)[:, mask] @ LUMA  # (K, n)
-        return flux_ratio_interval(ratio, r, totals.sum(axis=1))
+        return flux_ratio_interval(ratio, seed_luminance_totals(inputs.seed_estimates, mask))
     sigma = np.sqrt(np.maximum(np.asarray(inputs.variance, np.float64)[mask], 0.0)) * LUMA
     rho = inputs.channel_correlation
     texel = rho * sigma.sum(axis=1) ** 2 + (1.0 - rho) * (sigma**2).sum(axis=1)
