@@ -11,7 +11,9 @@
 //   1: xyz unit ray direction r, w estimated distance d (m)
 //   2: xyz estimated hit P = v + d r (m), w status (STATUS_* in common.glsl)
 //   3: rgb flux Phi (W; paper units in paper mode), w receiver index (-1: none)
-//   4: xyz receiver normal at the hit, w 0
+//   4: xyz receiver normal at the hit, w |l . n| where the vertex reflects off a
+//      conductor (light direction and shading normal; rim_patches.glsl patches the
+//      quads near grazing), else -1
 // History (binding 1): u_iterations + 1 floats per vertex, the estimate after
 // 0, 1, ..., u_iterations updates (entry 0 is the start d_1 = g(0)); after a
 // lost lookup or a divergence the last estimate is repeated. A reflected vertex whose
@@ -644,13 +646,17 @@ int verify_hit(vec3 v, vec3 r, vec3 n, float d, int material, int object,
     return status;
 }
 
+// |l . n| of this invocation's reflection off a conductor, -1 where it has none
+// (record 4's w).
+float g_reflection_cos = -1.0;
+
 void write_record(int base, vec3 v, float view, vec3 r, float d, vec3 p, int status,
                   vec3 flux, float receiver, vec3 normal) {
     records[base + 0] = vec4(v, view);
     records[base + 1] = vec4(r, d);
     records[base + 2] = vec4(p, float(status));
     records[base + 3] = vec4(flux, receiver);
-    records[base + 4] = vec4(normal, 0.0);
+    records[base + 4] = vec4(normal, g_reflection_cos);
 }
 
 void main() {
@@ -727,6 +733,7 @@ void main() {
     float inside = 0.0;                         // path length in the medium (m)
     if (material == 3) {
         r = reflect(l, n);
+        g_reflection_cos = abs(dot(l, n));
         flux *= u_reflectance[object];
     } else {
         r = refract(l, n, 1.0 / ior);

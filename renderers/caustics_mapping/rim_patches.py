@@ -1,7 +1,8 @@
 """Pass 3a, rim patches: the grid quads the caustic trace traces again, finer.
 
 ``rim_patches.glsl`` reads a trace's records and marks every grid quad near an
-object's silhouette seen from the light (``handoff``, one int per quad: 1 patched),
+object's silhouette seen from the light, or where a conductor reflects the light
+near grazing (``handoff``, one int per quad: 1 patched),
 then lists the marked quads in increasing order; the count is read back, and the
 caustic trace runs once more over the patches' vertices
 (:func:`.caustic_trace.run_caustic_trace` with ``patches``). The splat passes draw
@@ -29,6 +30,14 @@ EXITS_ONLY = True
 #: to the others (``rim_patches.glsl``): the same records, a third fewer traced on
 #: glass_sphere and bunny. False traces every copy (tests compare the two).
 SHARE_VERTICES = True
+#: A quad with a corner that reflects off a conductor at |l . n| below this is in the
+#: band wherever it lies (``rim_patches.glsl``, ``grazing``; 0: none, which tests
+#: compare). 0.3: the floor caustic of ``scenes/hard/concave``'s bowls starts at
+#: |l . n| < 0.3 on the outer wall, none above. strong's flux ratio on
+#: bowl_deep_sun75 (grid 128, 4 x 2^20 reference photons) with the band at 0 (the
+#: silhouette alone), 0.12, 0.2, 0.3, 0.5: 1.026, 1.026, 1.029, 1.011, 1.011: a band
+#: short of the source leaves the quads across its inner part to the grid.
+GRAZING_COS = 0.3
 
 
 @dataclass(eq=False)
@@ -137,6 +146,7 @@ def find_rim_patches(ctx: moderngl.Context, trace: Trace, *, grid: int,
         set_uniform(program, "u_grid", grid)
         set_uniform(program, "u_count", quads)
         set_uniform(program, "u_exits_only", int(EXITS_ONLY))
+        set_uniform(program, "u_grazing", float(GRAZING_COS))
         if groups:
             program.run(group_x=groups)
         ctx.memory_barrier()

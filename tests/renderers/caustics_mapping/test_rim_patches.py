@@ -1,8 +1,9 @@
 """Rim patches (``rim_patches.glsl``, ``caustic_trace.glsl``): the grid quads at an
-object's silhouette seen from the light are traced again as n x n patches whose
-splats replace theirs. Checked against the rule, recomputed here from the grid's
-statuses, and against the grid's own records: a patch's corners are grid vertices,
-seen along the same light rays."""
+object's silhouette seen from the light, and where a conductor reflects the light near
+grazing, are traced again as n x n patches whose splats replace theirs. Checked against
+the rule, recomputed here from the grid's statuses and directions, and against the
+grid's own records: a patch's corners are grid vertices, seen along the same light
+rays."""
 
 from __future__ import annotations
 
@@ -15,8 +16,10 @@ from harness.checks.stability import incident_flux_bound
 from renderers.caustics_mapping import caustic_trace, light_sample, render_frame, rim_patches
 from renderers.caustics_mapping.caustic_trace import STATUS
 from renderers.caustics_mapping.context import GLError
+from renderers.caustics_mapping.lights import light_setups
 from scenes import load_scene, with_settings
 from scenes.geometry import build_geometry
+from scenes.model import ConductorMaterial
 from scenes.schema import SceneError
 from tests.renderers.caustics_mapping.conftest import ROOT, small_scene
 
@@ -26,16 +29,36 @@ def _frame(ctx, name, **settings):
     return scene.settings.grid, render_frame(scene, ctx=ctx, lookups=False)
 
 
-def _band(status: np.ndarray, grid: int) -> np.ndarray:
+def _grazing(name: str, hits: dict) -> np.ndarray:
+    """Per grid vertex: it reflects off a conductor with |l . n| < GRAZING_COS, from
+    its reflected direction r = l - 2 (l . n) n, so |l . n| = sqrt((1 - r . l) / 2)
+    (every object of the scenes passed here is a conductor)."""
+    scene = small_scene(ROOT / "scenes" / f"{name}.toml", preset="strong")
+    assert all(isinstance(o.material, ConductorMaterial) for o in scene.objects)
+    light = light_setups(scene, build_geometry(scene), frustum_fit="tight")[0]
+    origin = hits["origin"].astype(np.float64)
+    if light.kind == "directional":
+        incident = np.broadcast_to(light.direction, origin.shape)
+    else:
+        incident = origin - light.position
+        incident = incident / np.linalg.norm(incident, axis=1, keepdims=True)
+    cos = np.sqrt(np.clip(0.5 * (1.0 - np.sum(incident * hits["direction"], axis=1)), 0, 1))
+    return (hits["status"] != STATUS["empty"]) & (cos < rim_patches.GRAZING_COS)
+
+
+def _band(status: np.ndarray, grid: int, grazing: np.ndarray | None = None) -> np.ndarray:
     """The grid quads the rule patches: a corner empty or next to (one step along an
-    axis) an empty vertex or the grid's border, and a corner whose light leaves the
-    object (any status but empty, TIR and no exit)."""
+    axis) an empty vertex or the grid's border, or reflecting near grazing
+    (``grazing``, per vertex), and a corner whose light leaves the object (any status
+    but empty, TIR and no exit)."""
     status = status.reshape(-1, grid, grid)
     empty = np.pad(status == STATUS["empty"], ((0, 0), (1, 1), (1, 1)), constant_values=True)
     near = empty.copy()
     near[:, 1:-1, 1:-1] |= (empty[:, 2:, 1:-1] | empty[:, :-2, 1:-1]
                             | empty[:, 1:-1, 2:] | empty[:, 1:-1, :-2])
     near = near[:, 1:-1, 1:-1]
+    if grazing is not None:
+        near = near | grazing.reshape(status.shape)
     inside = ("empty", "tir", "no_exit")
     leaves = ~np.isin(status, [STATUS[k] for k in inside])
     corners = lambda a: (a[:, :-1, :-1], a[:, :-1, 1:], a[:, 1:, :-1], a[:, 1:, 1:])  # noqa: E731
@@ -44,15 +67,36 @@ def _band(status: np.ndarray, grid: int) -> np.ndarray:
 
 
 @pytest.mark.regression_lock
-@pytest.mark.parametrize("name", ["glass_sphere", "metal_ring", "bunny"])
+@pytest.mark.parametrize("name", ["glass_sphere", "metal_ring", "bunny", "bowl_sun"])
 def test_the_patched_quads_are_the_rules_in_order(ctx, name):
     """The pass lists exactly the quads the rule names, each once, in increasing
-    order (the order the splats blend them in, the same on every run)."""
+    order (the order the splats blend them in, the same on every run); on the
+    conductors the grazing band adds quads the silhouette's band does not reach."""
     grid, frame = _frame(ctx, name)
     quads = frame.patches["quad"][:: 16]         # one per patch (4 x 4 vertices)
-    expected = np.flatnonzero(_band(frame.hits["status"], grid))
+    status = frame.hits["status"]
+    metal = name in ("metal_ring", "bowl_sun")
+    expected = np.flatnonzero(_band(status, grid, _grazing(name, frame.hits) if metal else None))
     assert len(expected) > 50
     np.testing.assert_array_equal(quads, expected)
+    if metal:
+        assert len(expected) > np.count_nonzero(_band(status, grid))
+
+
+@pytest.mark.regression_lock
+@pytest.mark.parametrize("name", ["glass_sphere", "water_pool", "bunny"])
+def test_the_grazing_band_leaves_dielectrics_as_they_were(ctx, monkeypatch, name):
+    """Only a conductor's reflection is graded by its grazing angle: without the
+    grazing band (``GRAZING_COS`` = 0) a dielectric scene's patches and receiver maps
+    are the same bit for bit (0: "the same render", not a calibrated bound)."""
+    _, banded = _frame(ctx, name)
+    monkeypatch.setattr(rim_patches, "GRAZING_COS", 0.0)
+    _, plain = _frame(ctx, name)
+    assert len(plain.patches["quad"]) > 0
+    for key, value in plain.patches.items():
+        np.testing.assert_array_equal(banded.patches[key], value, err_msg=key)
+    for mine, theirs in zip(banded.result.receivers, plain.result.receivers, strict=True):
+        np.testing.assert_array_equal(mine.irradiance, theirs.irradiance)
 
 
 @pytest.mark.regression_lock
