@@ -72,6 +72,11 @@ class TraceOptions:
     contact_test : bool
         A reflected hit where the object rests on the receiver (``under_contact`` in
         ``caustic_trace.glsl``) ends as ``reentered``; on with verified hits.
+    facet_side_test : bool
+        A conductor's reflected ray that leaves below the plane of its own triangle
+        (the shading normal tilted past the geometric one near grazing) meets its
+        object again, as the reference's photon does, and ends as ``reentered``
+        (``below_own_triangle`` in ``caustic_trace.glsl``); on with verified hits.
     shading_correction : bool
         Veach's adjoint shading-normal factor at every specular event (entry, exit),
         |d . n_s| |d' . n_g| / (|d . n_g| |d' . n_s|), as the reference's photons
@@ -91,6 +96,7 @@ class TraceOptions:
     converged: float = 0.0
     reflected_search: bool = False
     contact_test: bool = False
+    facet_side_test: bool = False
     shading_correction: bool = False
 
 
@@ -112,7 +118,7 @@ def trace_options(settings, eps: float) -> TraceOptions:
         hit_tolerance=settings.hit_tolerance,
         converged=CONVERGED if settings.safeguarded else 0.0,
         reflected_search=bool(settings.verify_hits), contact_test=bool(settings.verify_hits),
-        shading_correction=settings.preset == "strong")
+        facet_side_test=bool(settings.verify_hits), shading_correction=settings.preset == "strong")
 #: Largest number of caustic objects one render handles.
 MAX_OBJECTS = 8
 RECORD_FLOATS = 20
@@ -308,6 +314,7 @@ def run_caustic_trace(
         ("u_front_stride", front_stride), ("u_patches", int(patches is not None)),
         ("u_reflected_search", int(options.reflected_search)),
         ("u_contact_test", int(options.contact_test)),
+        ("u_facet_side", int(options.facet_side_test)),
         ("u_shading_correction", int(options.shading_correction)),
     ):
         set_uniform(program, name, value)
