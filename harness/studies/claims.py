@@ -368,10 +368,13 @@ def excess_ratio(method_one: np.ndarray, method_last: np.ndarray, reference: np.
                                      channel_correlation=channel_correlation,
                                      epsilon=epsilon, seed_estimates=seed_estimates)
                  for m in (method_one, method_last))
-    pair = (method_one, method_last)
-    cov = np.array([[relmse_covariance(x, y, reference, variance, seeds=seeds, mask=mask,
-                                       channel_correlation=channel_correlation,
-                                       epsilon=epsilon) for y in pair] for x in pair])
+    def covariance(x, y):
+        return relmse_covariance(x, y, reference, variance, seeds=seeds, mask=mask,
+                                 channel_correlation=channel_correlation, epsilon=epsilon)
+
+    cross = covariance(method_one, method_last)     # symmetric: one evaluation
+    cov = np.array([[covariance(method_one, method_one), cross],
+                    [cross, covariance(method_last, method_last)]])
     scale = math.sqrt(cov[0, 0] * cov[1, 1]) if cov[0, 0] > 0 and cov[1, 1] > 0 else 0.0
     correlation = float(np.clip(cov[0, 1] / scale, -1.0, 1.0)) if scale > 0 else 0.0
     e1, en = one.excess, last.excess

@@ -754,9 +754,9 @@ void main() {
         r = refract(l, n, 1.0 / ior);
         if (fresnel) flux *= fresnel_transmittance(-dot(l, n), 1.0, ior);
     }
-    if (dot(r, r) > 0.0) flux *= shading_factor(l, r, n, texelFetch(u_front_geometric, a, 0).xyz);
-    if (u_facet_side == 1 && material == 3
-            && below_own_triangle(l, r, texelFetch(u_front_geometric, a, 0).xyz)) {
+    vec3 ng = texelFetch(u_front_geometric, a, 0).xyz;
+    if (dot(r, r) > 0.0) flux *= shading_factor(l, r, n, ng);
+    if (u_facet_side == 1 && material == 3 && below_own_triangle(l, r, ng)) {
         for (int k = 0; k <= u_iterations; ++k) history[hbase + k] = 0.0;
         write_record(base, v, float(view), r, 0.0, v, STATUS_REENTERED, flux, -1.0, vec3(0.0));
         return;

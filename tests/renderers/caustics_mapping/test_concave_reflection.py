@@ -64,9 +64,9 @@ GAPS = {
         "band); patches of 9: 12 to 27 times the reference's (a sliver a few texels wide, "
         "sampled or missed whole)"),
 }
-#: The issue's scene (30 deg) and the member the grazing band of the rim patches closed
-#: (75 deg, rim_patches.GRAZING_COS) run by default, about a second each; the rest of
-#: the family is slow.
+#: The deep bowl under a 30 deg sun (the case that first showed the loss) and the member
+#: the grazing band of the rim patches closed (75 deg, rim_patches.GRAZING_COS) run by
+#: default, about a second each; the rest of the family is slow.
 DEFAULT = {"bowl_deep_sun30", "bowl_deep_sun75"}
 MEMBERS = sorted(p.stem for p in CONCAVE.glob("*.toml"))
 
