@@ -94,6 +94,11 @@ def round_mantissa(values: np.ndarray, bits: int = MANTISSA_BITS) -> np.ndarray:
     return np.where(normal & np.isfinite(values) & np.isfinite(out), out, values)
 
 
+#: zlib's level for the packed layers: on the demo's eight 512 x 512 layers level 6
+#: wrote 0.9 % more bytes than level 9 in a quarter of the time (0.35 s against 1.37 s).
+DEFLATE_LEVEL = 6
+
+
 def pack(values: np.ndarray) -> bytes:
     """Packed bytes of an (H, W) or (H, W, C) array taken as float32, without loss
     (module docstring; :func:`unpack` inverts it)."""
@@ -105,7 +110,7 @@ def pack(values: np.ndarray) -> bytes:
     delta = planar.copy()
     delta[..., 1:] -= planar[..., :-1]                              # wraps mod 2^32
     planes = delta.astype("<u4").reshape(-1).view(np.uint8).reshape(-1, 4).T
-    return zlib.compress(np.ascontiguousarray(planes).tobytes(), 9)
+    return zlib.compress(np.ascontiguousarray(planes).tobytes(), DEFLATE_LEVEL)
 
 
 def unpack(payload: bytes, shape: tuple[int, ...]) -> np.ndarray:
