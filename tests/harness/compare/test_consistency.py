@@ -19,7 +19,7 @@ import pytest
 from harness.cli import main
 from harness.commands.compare import excess_cell
 from harness.compare.consistency import disagreements
-from harness.studies.pareto import equal_error_speedup
+from harness.studies.pareto import CurveFitError, SpeedupUndefinedError, equal_error_speedup
 from reports.build import page_number
 from reports.records import MetricValue
 from tests.harness.commands.test_compare import SMALL, _small_scene
@@ -103,13 +103,21 @@ def test_compare_writes_everything_and_reuses_the_cache(run, tmp_path):
     reference = [r for r in cost if r["series"] == "reference"]
     one_off = speedups["reference"]["build_s"] + speedups["reference"]["compile_s"]
     for kind in ("warm", "cold"):
-        expected = equal_error_speedup(
-            float(base[f"time_{kind}_s"]), float(base["excess"]),
-            [float(r["time_warm_s"]) for r in reference],
-            [float(r["excess"]) for r in reference],
-            reference_stderrs=[float(r["excess_stderr"]) for r in reference],
-            method_stderr=float(base["excess_stderr"]),
-            overhead_s=one_off if kind == "cold" else 0.0)
+        try:
+            expected = equal_error_speedup(
+                float(base[f"time_{kind}_s"]), float(base["excess"]),
+                [float(r["time_warm_s"]) for r in reference],
+                [float(r["excess"]) for r in reference],
+                reference_stderrs=[float(r["excess_stderr"]) for r in reference],
+                method_stderr=float(base["excess_stderr"]),
+                overhead_s=one_off if kind == "cold" else 0.0)
+        except (CurveFitError, SpeedupUndefinedError):
+            # At this budget the reference's warm times are tens of milliseconds, where
+            # the machine's noise can outweigh the budgets' differences (measured once:
+            # 22, 13, 19 ms for errors falling tenfold each): the product then records no
+            # speedup, and so must the file.
+            assert speedups[kind] is None, kind
+            continue
         got = speedups[kind]
         assert got["kind"] == expected.kind, kind
         assert (got["speedup"], got["reference_time"]) == pytest.approx(
