@@ -99,21 +99,33 @@ def search_outcomes(scene: Scene, geometry: SceneGeometry,
     * ``estimator_failed_flux_fraction``: it meets a receiver first: a hit the
       method should have found and did not (the share a physical requirement bounds).
 
+    and, by the same exact rays, what the method's own tests ended as re-entering an
+    object (status ``reentered``: the exit ray's slab test, the reflected ray's
+    crossing, contact and facet-side tests) while the ray meets a receiver first:
+
+    * ``reentered_reaches_receiver_flux_fraction``: light the method's tests dropped
+      that the reference counts (on ``scenes/hard/concave``'s shallow bowl under a
+      45 deg sun, 6 % of the floor's flux at grid 128: grazing reflections off the
+      outer wall's lit sliver, judged crossing the sheet they leave).
+
     Each is a share of the traced flux (the non-empty vertices', summed over
     channels; ``hits`` holds every traced vertex at its ``flux`` share, as
-    :meth:`renderers.caustics_mapping.Frame.traced_records` gives them). The three add
-    up to the :data:`UNFOUND` statuses' share.
+    :meth:`renderers.caustics_mapping.Frame.traced_records` gives them). The first
+    three add up to the :data:`UNFOUND` statuses' share.
     """
     status = np.asarray(hits["status"]).astype(int)
     per_vertex = np.asarray(hits["flux"], np.float64).sum(axis=1)
     traced = float(per_vertex[status != STATUS["empty"]].sum())
     unfound = np.isin(status, [STATUS[name] for name in UNFOUND])
+    reentered = status == STATUS["reentered"]
     out = {"leaves_scene_flux_fraction": 0.0, "meets_object_flux_fraction": 0.0,
-           "estimator_failed_flux_fraction": 0.0}
-    if traced <= 0 or not unfound.any():
+           "estimator_failed_flux_fraction": 0.0,
+           "reentered_reaches_receiver_flux_fraction": 0.0}
+    judged = unfound | reentered
+    if traced <= 0 or not judged.any():
         return out
-    origin = np.asarray(hits["origin"], np.float64)[unfound]
-    direction = np.asarray(hits["direction"], np.float64)[unfound]
+    origin = np.asarray(hits["origin"], np.float64)[judged]
+    direction = np.asarray(hits["direction"], np.float64)[judged]
     direction = direction / np.linalg.norm(direction, axis=1, keepdims=True)
     extent = max((float(np.max(np.abs(g.mesh.positions))) for g in geometry.receivers),
                  default=1.0)
@@ -132,11 +144,14 @@ def search_outcomes(scene: Scene, geometry: SceneGeometry,
         again = tracer(start[own], direction[own])
         for field in ("kind", "distance"):
             getattr(exact, field)[own] = getattr(again, field)
-    flux = per_vertex[unfound]
+    flux = per_vertex[judged]
+    was_unfound = unfound[judged]
     for key, kind in (("leaves_scene_flux_fraction", SurfaceTracer.NONE),
                       ("meets_object_flux_fraction", SurfaceTracer.OBJECT),
                       ("estimator_failed_flux_fraction", SurfaceTracer.RECEIVER)):
-        out[key] = float(flux[exact.kind == kind].sum()) / traced
+        out[key] = float(flux[was_unfound & (exact.kind == kind)].sum()) / traced
+    out["reentered_reaches_receiver_flux_fraction"] = float(
+        flux[~was_unfound & (exact.kind == SurfaceTracer.RECEIVER)].sum()) / traced
     return out
 
 

@@ -8,7 +8,9 @@ receiver (``off_receiver_flux_fraction``) and sorts the vertices left without a
 verified hit (lost, unconverged, diverged) by their exact rays
 (:func:`harness.checks.stability.search_outcomes`): the light leaves the scene, meets
 an object again (a chain the method does not model), or the estimator failed (a
-receiver is on the ray: the one share a physical requirement bounds). With the flux
+receiver is on the ray: the one share a physical requirement bounds); and, of the
+vertices the method's tests ended as re-entering an object, those whose exact ray
+meets a receiver first (light the tests dropped). With the flux
 on the receiver maps, of the method and of the reference, this says why a flux ratio
 is far from 1: light lost to total internal reflection, held back unconverged,
 splatted where no receiver is, or never emitted (a dark light).
@@ -68,7 +70,8 @@ _STATUS_ROWS = (
 )
 
 
-#: The exact fates of the vertices whose search ended without a verified hit (keys of
+#: The exact fates of the vertices whose search ended without a verified hit, and the
+#: re-entered ones' light that reaches a receiver (keys of
 #: :func:`harness.checks.stability.search_outcomes`), their ``key`` and label.
 SEARCH_ROWS = (
     ("leaves_scene_flux_fraction", "leaves_scene",
@@ -77,6 +80,8 @@ SEARCH_ROWS = (
      "  of the lost, unconverged, diverged: meets an object again (a chain not modelled)"),
     ("estimator_failed_flux_fraction", "estimator_failed",
      "  of the lost, unconverged, diverged: estimator failed (exact ray meets a receiver)"),
+    ("reentered_reaches_receiver_flux_fraction", "reentered_reaches_receiver",
+     "  of the re-entered: a test ended it, but the exact ray meets a receiver first"),
 )
 
 

@@ -55,8 +55,8 @@ def test_search_outcomes_sort_the_unfound_flux_by_exact_rays(bowl):
 
 
 def test_method_budget_shows_the_three_fates_apart(bowl):
-    """Regression lock: the budget's detail rows carry the three shares under their
-    own keys, in watts of the traced flux (15 W a channel, 45 W summed)."""
+    """Regression lock: the budget's detail rows carry the three shares (and the
+    re-entered vertices' share that reaches a receiver, 0 here) under their own keys, in watts of the traced flux (15 W a channel, 45 W summed)."""
     scene, geometry = bowl
     hits = _records()
     stability = search_outcomes(scene, geometry, hits)
@@ -81,3 +81,23 @@ def test_an_origin_just_inside_its_own_surface_is_not_a_second_meeting(bowl):
     shares = search_outcomes(scene, geometry, hits)
     assert shares["estimator_failed_flux_fraction"] == pytest.approx(1.0)
     assert shares["meets_object_flux_fraction"] == 0.0
+
+
+def test_a_reentered_vertex_whose_ray_meets_the_floor_is_light_a_test_dropped(bowl):
+    """Regression lock on hand-derived shares (known answer): of three vertices, 7 W a
+    channel traced, one ended as re-entered with its ray down into the bowl (meets it:
+    the chain truly ends, 1 W), one ended as re-entered with its ray down onto the floor
+    beside the bowl (2 W: a test dropped light that reaches a receiver) and one
+    unconverged onto the floor (4 W: the estimator failed). The re-entered vertices
+    stay out of the three fates of the unfound ones."""
+    scene, geometry = bowl
+    hits = {"status": np.array([STATUS[s] for s in ("reentered", "reentered", "unconverged")]),
+            "origin": np.array([[0.5, 0, 3], [3, 3, 1], [-3, 2, 1.0]]),
+            "direction": np.array([[0, 0, -1], [0, 0, -1], [0, 0, -1.0]]),
+            "flux": np.repeat(np.array([[1.0], [2.0], [4.0]]), 3, axis=1),
+            "receiver": np.full(3, -1)}
+    shares = search_outcomes(scene, geometry, hits)
+    assert shares["reentered_reaches_receiver_flux_fraction"] == pytest.approx(2 / 7)
+    assert shares["estimator_failed_flux_fraction"] == pytest.approx(4 / 7)
+    assert shares["meets_object_flux_fraction"] == 0.0
+    assert shares["leaves_scene_flux_fraction"] == 0.0
