@@ -64,6 +64,7 @@ uniform sampler2D u_front_geometric;      // object atlas: the triangles' geomet
 uniform sampler2D u_back_positions;      // object atlas at u_back_size texels per view
 uniform sampler2D u_back_normals;
 uniform sampler2D u_back_geometric;
+uniform int u_crossing_direction;      // 1: crosses_layer's direction test
 uniform int u_shading_correction;         // 1: Veach's adjoint shading-normal factor
 uniform int u_grid;
 uniform int u_front_stride;     // front-atlas texels per grid step (odd)
@@ -373,15 +374,15 @@ bool reenters(vec3 e, vec3 r, int object) {
     return false;
 }
 
-// One layer of a reflection_blocked test: the sample's side of the layer's surface
-// seen through its texel (nearest), and whether the ray crossed that surface since
-// the last sample that saw it (`s_prev`, `f_prev`, `n_prev`: its side, the surface
-// point and normal seen; `have_prev`: whether there is one). `edge`: a sample whose
+// One layer of a reflection_blocked test: the sample x's side of the layer's surface
+// seen through its texel (nearest), and whether the ray (direction r) crossed that
+// surface since the last sample that saw it (`s_prev`, `f_prev`, `n_prev`: its side,
+// the surface point and normal seen; `have_prev`: whether there is one). `edge`: a sample whose
 // texel shows no object, after one behind an edge-on sheet (|cos| to the light below
 // GRAZING), left through that sheet (see reflection_blocked).
 bool crosses_layer(sampler2D positions, sampler2D normals, int stride, bool edge, vec3 x,
-                   int object, float step, float w, inout float s_prev, inout vec3 f_prev,
-                   inout vec3 n_prev, inout bool have_prev) {
+                   vec3 r, int object, float step, float w, inout float s_prev,
+                   inout vec3 f_prev, inout vec3 n_prev, inout bool have_prev) {
     int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
     vec2 ndc;
     vec4 f = vec4(0.0);
@@ -401,6 +402,16 @@ bool crosses_layer(sampler2D positions, sampler2D normals, int stride, bool edge
     float s = light_distance(x) - light_distance(f.xyz);   // > 0: behind it from the light
     bool crossed = have_prev && (s > 0.0) != (s_prev > 0.0) && dot(n, n_prev) > 0.5
         && abs(dot(f.xyz - f_prev, n_prev)) <= SHEET_STEPS * step + 2.0 * w;
+    // A ray that passes from the lit side of a sheet to behind it runs against the
+    // sheet's light-facing normal (r . n < 0), and one passing back runs with it. A
+    // sign change of s that the ray's direction contradicts is the texels' rounding
+    // on a sheet seen nearly edge-on, whose depth changes by about w / |cos| across
+    // a texel: grazing reflections leaving the convex outer wall of a bowl run along
+    // the light's silhouette within a texel of it (TraceOptions.crossing_direction).
+    if (crossed && u_crossing_direction == 1) {
+        vec3 lit = dot(n, incident_dir(f.xyz)) < 0.0 ? n : -n;
+        crossed = s > 0.0 ? dot(r, lit) < 0.0 : dot(r, lit) > 0.0;
+    }
     s_prev = s;
     f_prev = f.xyz;
     n_prev = n;
@@ -443,10 +454,10 @@ bool reflection_blocked(vec3 v, vec3 r, float d, int object, bool edge) {
         float w = view / float(u_grid) * (u_obj_persp == 1 ? length(x - u_light_pos) : 1.0);
         if (step * float(k) < 2.0 * w) continue;
         if (crosses_layer(u_front_positions, u_front_normals, u_front_stride, edge, x,
-                          object, step, w, s_front, f_front, n_front, have_front))
+                          r, object, step, w, s_front, f_front, n_front, have_front))
             return true;
         if (u_has_far == 1 && crosses_layer(u_far_positions, u_far_normals, 1, false, x,
-                                            object, step, w, s_far, f_far, n_far, have_far))
+                                            r, object, step, w, s_far, f_far, n_far, have_far))
             return true;
     }
     return false;

@@ -77,6 +77,12 @@ class TraceOptions:
         (the shading normal tilted past the geometric one near grazing) meets its
         object again, as the reference's photon does, and ends as ``reentered``
         (``below_own_triangle`` in ``caustic_trace.glsl``); on with verified hits.
+    crossing_direction : bool
+        The reflected ray's crossing test (``reflection_blocked``) counts a sign
+        change of the depth difference as a crossing only where the ray's direction
+        agrees with it (from the lit side to behind a sheet: against the sheet's
+        light-facing normal; ``crosses_layer`` in ``caustic_trace.glsl``); on with
+        verified hits.
     shading_correction : bool
         Veach's adjoint shading-normal factor at every specular event (entry, exit),
         |d . n_s| |d' . n_g| / (|d . n_g| |d' . n_s|), as the reference's photons
@@ -97,6 +103,7 @@ class TraceOptions:
     reflected_search: bool = False
     contact_test: bool = False
     facet_side_test: bool = False
+    crossing_direction: bool = False
     shading_correction: bool = False
 
 
@@ -118,7 +125,9 @@ def trace_options(settings, eps: float) -> TraceOptions:
         hit_tolerance=settings.hit_tolerance,
         converged=CONVERGED if settings.safeguarded else 0.0,
         reflected_search=bool(settings.verify_hits), contact_test=bool(settings.verify_hits),
-        facet_side_test=bool(settings.verify_hits), shading_correction=settings.preset == "strong")
+        facet_side_test=bool(settings.verify_hits),
+        crossing_direction=bool(settings.verify_hits),
+        shading_correction=settings.preset == "strong")
 #: Largest number of caustic objects one render handles.
 MAX_OBJECTS = 8
 RECORD_FLOATS = 20
@@ -315,6 +324,7 @@ def run_caustic_trace(
         ("u_reflected_search", int(options.reflected_search)),
         ("u_contact_test", int(options.contact_test)),
         ("u_facet_side", int(options.facet_side_test)),
+        ("u_crossing_direction", int(options.crossing_direction)),
         ("u_shading_correction", int(options.shading_correction)),
     ):
         set_uniform(program, name, value)
