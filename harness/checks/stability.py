@@ -105,7 +105,7 @@ def search_outcomes(scene: Scene, geometry: SceneGeometry,
 
     * ``reentered_reaches_receiver_flux_fraction``: light the method's tests dropped
       that the reference counts (on ``scenes/hard/concave``'s shallow bowl under a
-      45 deg sun, 6 % of the floor's flux at grid 128: grazing reflections off the
+      45 deg sun, 2.9 % of the floor's flux at grid 128: grazing reflections off the
       outer wall's lit sliver, judged crossing the sheet they leave).
 
     Each is a share of the traced flux (the non-empty vertices', summed over
