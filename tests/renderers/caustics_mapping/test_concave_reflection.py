@@ -148,6 +148,19 @@ def test_the_search_changes_only_what_the_estimator_left_unverified(context_fact
     assert found.sum() > 0.1 * kept.sum()
 
 
+def _with_and_without(context_factory, monkeypatch, name, option):
+    """The member ``name`` (strong, grid 128, 256² maps), its geometry, and its frames
+    with the trace option ``option`` on (the preset's) and off."""
+    scene = small_scene(CONCAVE / f"{name}.toml", preset="strong", grid=128,
+                        caustic_map=256, positions_map=256, receiver_map=[128, 128])
+    geometry = build_geometry(scene)
+    on = render_frame(scene, ctx=context_factory(), geometry=geometry)
+    options = caustic_trace.trace_options
+    monkeypatch.setattr(light_sample, "trace_options", lambda s, e: dataclasses.replace(
+        options(s, e), **{option: False}))
+    return scene, geometry, on, render_frame(scene, ctx=context_factory(), geometry=geometry)
+
+
 @pytest.mark.physical_requirement
 def test_a_reflection_below_its_own_triangle_meets_the_bowl_again(context_factory,
                                                                    monkeypatch):
@@ -160,14 +173,8 @@ def test_a_reflection_below_its_own_triangle_meets_the_bowl_again(context_factor
     1.11 %: without the test these were splatted as floor hits), and reach the floor
     for at most 1 % of it (``ESTIMATOR_FAILED_BOUND``, the allowance for light the
     method wrongly leaves unsplatted; measured 0.09 %)."""
-    scene = small_scene(CONCAVE / "bowl_deep_sun75.toml", preset="strong", grid=128,
-                        caustic_map=256, positions_map=256, receiver_map=[128, 128])
-    geometry = build_geometry(scene)
-    on = render_frame(scene, ctx=context_factory(), geometry=geometry)
-    options = caustic_trace.trace_options
-    monkeypatch.setattr(light_sample, "trace_options", lambda s, e: dataclasses.replace(
-        options(s, e), facet_side_test=False))
-    off = render_frame(scene, ctx=context_factory(), geometry=geometry)
+    scene, geometry, on, off = _with_and_without(context_factory, monkeypatch,
+                                                 "bowl_deep_sun75", "facet_side_test")
     hit, reentered = caustic_trace.STATUS["hit"], caustic_trace.STATUS["reentered"]
     tracer = SurfaceTracer(scene, geometry)
     floor = meets_bowl = meets_floor = 0.0
@@ -198,14 +205,8 @@ def test_the_crossing_test_keeps_only_grazing_light_that_reaches_the_floor(conte
     allowance for light the method wrongly splats; measured 0). Every other vertex
     keeps its status and record, but for re-entered reflections of the receiver
     search that its stricter test then holds back (``stays_in_front``: unconverged)."""
-    scene = small_scene(CONCAVE / "bowl_shallow_sun45.toml", preset="strong", grid=128,
-                        caustic_map=256, positions_map=256, receiver_map=[128, 128])
-    geometry = build_geometry(scene)
-    on = render_frame(scene, ctx=context_factory(), geometry=geometry)
-    options = caustic_trace.trace_options
-    monkeypatch.setattr(light_sample, "trace_options", lambda s, e: dataclasses.replace(
-        options(s, e), crossing_direction=False))
-    off = render_frame(scene, ctx=context_factory(), geometry=geometry)
+    scene, geometry, on, off = _with_and_without(context_factory, monkeypatch,
+                                                 "bowl_shallow_sun45", "crossing_direction")
     status = caustic_trace.STATUS
     tracer = SurfaceTracer(scene, geometry)
     floor = kept = meets_bowl = 0.0
