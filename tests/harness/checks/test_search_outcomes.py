@@ -56,7 +56,8 @@ def test_search_outcomes_sort_the_unfound_flux_by_exact_rays(bowl):
 
 def test_method_budget_shows_the_three_fates_apart(bowl):
     """Regression lock: the budget's detail rows carry the three shares (and the
-    re-entered vertices' share that reaches a receiver, 0 here) under their own keys, in watts of the traced flux (15 W a channel, 45 W summed)."""
+    re-entered vertices' share that reaches a receiver, 0 here) under their own keys,
+    in watts of the traced flux (15 W a channel, 45 W summed)."""
     scene, geometry = bowl
     hits = _records()
     stability = search_outcomes(scene, geometry, hits)
