@@ -64,7 +64,7 @@ uniform sampler2D u_front_geometric;      // object atlas: the triangles' geomet
 uniform sampler2D u_back_positions;      // object atlas at u_back_size texels per view
 uniform sampler2D u_back_normals;
 uniform sampler2D u_back_geometric;
-uniform int u_crossing_direction;      // 1: crosses_layer's direction test
+uniform int u_crossing_direction;         // 1: crosses_layer's direction test
 uniform int u_shading_correction;         // 1: Veach's adjoint shading-normal factor
 uniform int u_grid;
 uniform int u_front_stride;     // front-atlas texels per grid step (odd)
@@ -377,9 +377,9 @@ bool reenters(vec3 e, vec3 r, int object) {
 // One layer of a reflection_blocked test: the sample x's side of the layer's surface
 // seen through its texel (nearest), and whether the ray (direction r) crossed that
 // surface since the last sample that saw it (`s_prev`, `f_prev`, `n_prev`: its side,
-// the surface point and normal seen; `have_prev`: whether there is one). `edge`: a sample whose
-// texel shows no object, after one behind an edge-on sheet (|cos| to the light below
-// GRAZING), left through that sheet (see reflection_blocked).
+// the surface point and normal seen; `have_prev`: whether there is one). `edge`: a
+// sample whose texel shows no object, after one behind an edge-on sheet (|cos| to the
+// light below GRAZING), left through that sheet (see reflection_blocked).
 bool crosses_layer(sampler2D positions, sampler2D normals, int stride, bool edge, vec3 x,
                    vec3 r, int object, float step, float w, inout float s_prev,
                    inout vec3 f_prev, inout vec3 n_prev, inout bool have_prev) {
