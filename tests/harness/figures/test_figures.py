@@ -1,7 +1,11 @@
 """`caustics figures --quick`: every figure is written with its data and caption, no
 two of its texts overlap, and the data say what the paper's figures show (the data
 are checked, not the pixels); and the overlap check itself, on figures made to
-overlap and not to."""
+overlap and not to.
+
+The default run makes the figures of :data:`SUBSET` (about 10 s of the command's
+45 s on llvmpipe: fig07 0.6 s, fig11 1.0 s, fig12 1.5 s, fig13a 3.0 s, decomposition
+3.4 s); every figure, and the tests of the others' data, run with ``slow``."""
 
 from __future__ import annotations
 
@@ -16,18 +20,19 @@ from harness.cli import main
 from harness.figures import FIGURES, FigureContext, common
 from harness.figures.common import FigureTextOverlapError, text_overlaps
 
-#: What ``FigureContext.save`` found when it checked each figure's texts, by figure
-#: name (None: saved without the check); filled by the ``figures`` fixture.
-CHECKED: dict[str, list | None] = {}
+#: The figures the default run makes (the cheapest at quick settings, each with a
+#: test of its data below); the rest are made for the ``slow`` tests.
+SUBSET = ("fig07", "fig11", "fig12", "fig13a", "decomposition")
 
 
-@pytest.fixture(scope="module")
-def figures(tmp_path_factory):
-    """Every figure at quick settings, through the command; records what the overlap
-    check that ``save`` runs found for each (a failing check also fails the command,
-    whose assertion then shows the pairs)."""
+def _made(tmp_path_factory, names):
+    """The figures ``names`` at quick settings, through the command: the output folder
+    and what the overlap check that ``save`` runs found for each, by figure name (None:
+    saved without the check; a failing check also fails the command, whose assertion
+    then shows the pairs)."""
     out = tmp_path_factory.mktemp("figures")
     found: dict[int, list] = {}
+    checked: dict[str, list | None] = {}
     real_overlaps, real_save = common.text_overlaps, FigureContext.save
 
     def recording_overlaps(figure, **kwargs):
@@ -38,14 +43,43 @@ def figures(tmp_path_factory):
         try:
             return real_save(self, name, figure, **kwargs)
         finally:
-            CHECKED[name] = found.pop(id(figure), None)
+            checked[name] = found.pop(id(figure), None)
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(common, "text_overlaps", recording_overlaps)
         patch.setattr(FigureContext, "save", recording_save)
-        code = main(["figures", "-o", str(out), "--quick", "-q"])
-    assert code == 0, CHECKED
-    return out
+        code = main(["figures", "-o", str(out), "--quick", "-q", "--only", ",".join(names)])
+    assert code == 0, checked
+    return out, checked
+
+
+@pytest.fixture(scope="module")
+def subset(tmp_path_factory):
+    """:data:`SUBSET`'s figures (:func:`_made`)."""
+    return _made(tmp_path_factory, SUBSET)
+
+
+@pytest.fixture(scope="module")
+def every(tmp_path_factory):
+    """Every figure (:func:`_made`)."""
+    return _made(tmp_path_factory, tuple(FIGURES))
+
+
+@pytest.fixture
+def figures(subset):
+    """The folder of :data:`SUBSET`'s figures."""
+    return subset[0]
+
+
+@pytest.fixture
+def all_figures(every):
+    """The folder of every figure."""
+    return every[0]
+
+
+#: The two runs: the subset by default, every figure with ``slow``.
+RUNS = [pytest.param("subset", SUBSET, id="subset"),
+        pytest.param("every", tuple(FIGURES), id="every", marks=pytest.mark.slow)]
 
 
 def _csv(path):
@@ -53,21 +87,25 @@ def _csv(path):
         return list(csv.DictReader(f))
 
 
-def test_every_figure_has_png_pdf_data_and_caption(figures):
-    for name in FIGURES:
-        assert (figures / f"{name}.png").stat().st_size > 1000
-        assert (figures / f"{name}.pdf").read_bytes().startswith(b"%PDF")
-        assert (figures / f"{name}.csv").is_file() or (figures / f"{name}.json").is_file()
-        caption = (figures / f"{name}.txt").read_text()
+@pytest.mark.parametrize(("run", "names"), RUNS)
+def test_every_figure_has_png_pdf_data_and_caption(run, names, request):
+    out, _ = request.getfixturevalue(run)
+    for name in names:
+        assert (out / f"{name}.png").stat().st_size > 1000
+        assert (out / f"{name}.pdf").read_bytes().startswith(b"%PDF")
+        assert (out / f"{name}.csv").is_file() or (out / f"{name}.json").is_file()
+        caption = (out / f"{name}.txt").read_text()
         assert caption.startswith("Fig.") and any(ch.isdigit() for ch in caption)
 
 
-def test_no_figure_has_overlapping_text(figures):
-    """Each figure the command can produce was checked when saved, and none has two
-    texts over each other (the bottom row of Figs. 6 and 10 once had its panel titles
-    run into each other)."""
-    assert set(CHECKED) == set(FIGURES)
-    assert {name: found for name, found in CHECKED.items() if found != []} == {}
+@pytest.mark.parametrize(("run", "names"), RUNS)
+def test_no_figure_has_overlapping_text(run, names, request):
+    """Each figure the run made was checked when saved, and none has two texts over
+    each other (the bottom row of Figs. 6 and 10 once had its panel titles run into
+    each other)."""
+    _, checked = request.getfixturevalue(run)
+    assert set(checked) == set(names)
+    assert {name: found for name, found in checked.items() if found != []} == {}
 
 
 def _two_titles(*, gap: float):
@@ -147,11 +185,12 @@ def test_command_fails_on_a_figure_with_overlapping_text(tmp_path, monkeypatch, 
     assert "'left: a title" in err[0] and "'right: a title" in err[0]
 
 
-def test_fig06_both_methods_scored(figures):
+@pytest.mark.slow
+def test_fig06_both_methods_scored(all_figures):
     """Both of the paper's estimators (paper preset) and the strong preset beside
     them are scored; the strong preset's receiver error is below the paper's
     (method target, also at the figures' quick settings)."""
-    rows = {(r["preset"], r["estimator"]): r for r in _csv(figures / "fig06.csv")}
+    rows = {(r["preset"], r["estimator"]): r for r in _csv(all_figures / "fig06.csv")}
     assert set(rows) == {("paper", "secant"), ("paper", "modified"), ("strong", "secant")}
     for row in rows.values():
         assert 0 < float(row["receiver_relmse"]) < 1 and float(row["frame_ms"]) > 0
@@ -179,11 +218,12 @@ def test_fig13a_absorption_colours_agree(figures):
         assert a == pytest.approx(b, rel=0.03)
 
 
-def test_fig13b_channels_separate(figures):
+@pytest.mark.slow
+def test_fig13b_channels_separate(all_figures):
     """Higher IOR focuses closer (ball lens: f = nR / 2(n − 1) from the centre, 1.61 m
     for red, 1.31 m for blue), so on the floor 2 m below the centre blue has passed
     its focus furthest and spreads widest: radius R < G < B in both renderers."""
-    rows = _csv(figures / "fig13b.csv")
+    rows = _csv(all_figures / "fig13b.csv")
     for renderer in ("caustics mapping", "reference"):
         radius = {r["channel"]: float(r["radius_m"]) for r in rows if r["renderer"] == renderer}
         assert radius["R"] < radius["G"] < radius["B"], (renderer, radius)
@@ -216,12 +256,13 @@ def test_decomposition_figure_names_the_bunnys_largest_source(figures):
     assert "holds (paper preset)" in caption or "does not hold (paper preset)" in caption
 
 
-def test_fig08_is_the_water_animation_with_its_flicker(figures):
+@pytest.mark.slow
+def test_fig08_is_the_water_animation_with_its_flicker(all_figures):
     """The Fig. 8 analogue is a sequence (``harness.studies.temporal``): both presets,
     6 frames each at 30 fps, per-frame relMSE and, for every frame pair, the flicker
     and its noise floor; the caption and the JSON name the steadier preset
     (regression lock on the outputs' content, not on numbers)."""
-    rows = _csv(figures / "fig08.csv")
+    rows = _csv(all_figures / "fig08.csv")
     for preset in ("paper", "strong"):
         mine = [r for r in rows if r["preset"] == preset]
         assert [int(r["frame"]) for r in mine] == list(range(6))
@@ -229,29 +270,30 @@ def test_fig08_is_the_water_animation_with_its_flicker(figures):
         assert all(float(r["flicker_caustic"]) > 0 and float(r["flicker_caustic_floor"]) > 0
                    for r in mine[1:])
         assert all(0 < float(r["relmse_caustic"]) < 1 for r in mine)
-    data = json.loads((figures / "fig08.json").read_text())
+    data = json.loads((all_figures / "fig08.json").read_text())
     assert data["frames"] == 6 and data["fps"] == 30.0
     steadier = data["steadier"]
     flicker = {p: data["presets"][p]["flicker"]["caustic"]["value"] for p in ("paper", "strong")}
     assert flicker[steadier] == min(flicker.values())
-    assert f"{steadier} flickers least" in (figures / "fig08.txt").read_text()
+    assert f"{steadier} flickers least" in (all_figures / "fig08.txt").read_text()
 
 
-def test_camera_figures_score_the_object_seen_through(figures):
+@pytest.mark.slow
+def test_camera_figures_score_the_object_seen_through(all_figures):
     """Figs. 1, 6, 9 and 10 (the camera view the paper shows): both renderers draw the
     refractive object, so each camera figure scores the object region (the pixels inside
     its silhouette), per method. At the quick figures' 128² camera the glass sphere's
     silhouette holds about 930 pixels and the bunny's more (harness.compare.regions), so
     each region has over 300; every object metric is a finite number."""
-    rows = _csv(figures / "fig09.csv") + _csv(figures / "fig01.csv")
+    rows = _csv(all_figures / "fig09.csv") + _csv(all_figures / "fig01.csv")
     assert {r["scene"] for r in rows} == {"glass_sphere", "bunny", "colored_bunny"}
-    assert {r["method"] for r in _csv(figures / "fig01.csv")} == {"paper preset",
-                                                                  "strong preset"}
+    methods = {r["method"] for r in _csv(all_figures / "fig01.csv")}
+    assert methods == {"paper preset", "strong preset"}
     for row in rows:
         assert int(row["object_pixels"]) > 300, row
         assert all(math.isfinite(float(row[k])) for k in ("object_relmse", "object_ssim",
                                                           "object_flip")), row
-    fig06 = _csv(figures / "fig06.csv")
+    fig06 = _csv(all_figures / "fig06.csv")
     assert len(fig06) == 3 and all(math.isfinite(float(r["object_relmse"])) for r in fig06)
-    fig10 = json.loads((figures / "fig10.json").read_text())
+    fig10 = json.loads((all_figures / "fig10.json").read_text())
     assert [o["method"] for o in fig10["object"]] == ["paper preset", "strong preset"]
