@@ -77,8 +77,10 @@ __all__ = ["CACHE_ENV", "CAMERA_INTEGRATORS", "FORMAT_VERSION", "STALE_AFTER", "
 #: with launches past the budget until the target (``relative_noise_per_channel``,
 #: ``reference_time_cap``, ``stopped_by`` ``time_cap``), and all-paths mode plays
 #: Russian roulette past 64 events up to a 4096-event safety cap; 9: each receiver EXR
-#: also holds the K seeds' own maps (layers ``seed0`` … ``seed{K-1}``)
-FORMAT_VERSION = 9
+#: also holds the K seeds' own maps (layers ``seed0`` … ``seed{K-1}``); 10: a photon
+#: whose last segment leaked through a mesh edge is not deposited
+#: (``photons.PhotonTracer._leaked``)
+FORMAT_VERSION = 10
 RESULT_JSON = "result.json"
 #: Camera integrators of the reference (``render_reference(camera=...)``), and the name
 #: each records as ``camera_integrator`` in its metadata.

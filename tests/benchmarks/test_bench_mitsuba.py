@@ -89,3 +89,32 @@ def test_cost_of_the_path_limit(request, monkeypatch):
     benchmark_info = request.node.user_properties
     benchmark_info.append(("time_ratio_median", float(np.median(ratios))))
     benchmark_info.append(("ray_cast_ratio", work))
+
+
+@pytest.mark.parametrize("name", ["glass_sphere", "bowl_sun", "bunny"])
+def test_cost_of_the_leak_test(request, monkeypatch, name):
+    """Caustic-only photons per second with and without the leak test
+    (``photons.LEAK_TEST``: one shadow ray back along each deposited segment), warm
+    (each compiled once first), same seeds, 7 rounds alternating the two; and the
+    share of the caustic flux it removes (docs/reference.md, "Leaks")."""
+    scene = load_scene(request.config.rootpath / "scenes" / f"{name}.toml")
+    tracer, n, tests = PhotonTracer(scene, caustic_only=True), 1 << 21, (False, True)
+    for test in tests:
+        monkeypatch.setattr(module, "LEAK_TEST", test)
+        tracer.trace(1 << 20, seed=99)  # compile once
+    times, flux = {test: [] for test in tests}, {test: 0.0 for test in tests}
+    for seed in range(7):
+        for test in tests:
+            monkeypatch.setattr(module, "LEAK_TEST", test)
+            start = time.perf_counter()
+            sums = tracer.trace(n, seed=seed)
+            times[test].append(time.perf_counter() - start)
+            flux[test] += float(sum(np.asarray(c, np.float64).sum() for c in sums.caustic))
+    ratios = np.array(times[True]) / np.array(times[False])
+    removed = 1.0 - flux[True] / flux[False]
+    print(f"\n{name}, caustic only, {n} photons a round: leak test off "
+          f"{n / np.median(times[False]) / 1e6:.3f}, on {n / np.median(times[True]) / 1e6:.3f} "
+          f"M photons/s (medians of 7, warm); on / off per round median "
+          f"{np.median(ratios):.3f} (range {ratios.min():.3f}..{ratios.max():.3f}); "
+          f"removed {removed:.2e} of the caustic flux")
+    request.node.user_properties.append(("time_ratio_median", float(np.median(ratios))))
