@@ -102,12 +102,13 @@ def judge(kind: str, bound: float, value: float,
     bound): holds when the whole interval lies within 1 ± bound, fails when none of
     it does. Otherwise the interval straddles the bound: undecided (more reference
     photons would decide it). Without an interval the value alone decides
-    (:func:`holds`); a NaN value or interval end fails.
+    (:func:`holds`); a non-finite value or a NaN interval end fails (an infinite end
+    is an unbounded interval: a ratio over a reference total that may be 0).
     """
     if interval is None:
         return "holds" if holds(kind, bound, value) else "fails"
     low, high = (float(x) for x in interval)
-    if not (math.isfinite(value) and math.isfinite(low) and math.isfinite(high)):
+    if not math.isfinite(value) or math.isnan(low) or math.isnan(high):
         return "fails"
     if kind == "max":
         inside, outside = high <= bound, low > bound

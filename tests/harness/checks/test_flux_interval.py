@@ -1,7 +1,9 @@
 """*flux agreement*'s interval from the reference's per-seed totals
 (``harness.checks.physical.seed_flux_interval``): a known answer, and its coverage by
 simulation under photon noise whose texels anticorrelate (a fixed photon count per seed,
-as stratified emission gives). Kind: physical requirement on the check's statistics."""
+as stratified emission gives); and the flux ratio's interval
+(``harness.checks.physical.ratio_interval``), whose coverage holds where the reference's
+total is as noisy as its mean. Kind: physical requirement on the check's statistics."""
 
 from __future__ import annotations
 
@@ -9,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.special import stdtrit
 
-from harness.checks.physical import flux_standard_error, seed_flux_interval
+from harness.checks.physical import flux_standard_error, ratio_interval, seed_flux_interval
 from renderers.results import ReceiverMap
 
 
@@ -62,3 +64,37 @@ def test_interval_covers_the_true_flux_where_texel_variances_overstate_it():
         total = m.total_flux()[0]
         covered += abs(total - 1.0) <= q * rel[0] * total
     assert 0.93 <= covered / trials <= 0.97, covered / trials
+
+
+@pytest.mark.parametrize("relative", [0.01, 0.5, 1.0])
+def test_the_ratio_interval_covers_the_true_ratio_however_noisy_the_reference(relative):
+    """A method total M = 1 W against a reference whose 4 per-seed totals are normal
+    about 1 W with a relative standard deviation of 2 × ``relative`` (its mean's
+    relative standard error ``relative``: 1 % is a bundled scene's budget, 1.0 the
+    shallow bowl under a 60 deg sun, whose floor gets a few photons). The ratio's
+    interval covers the true ratio 1 in 93-97 % of 4,000 trials (binomial SE 0.34 %)
+    at every noise level: it is the image of the reference's t interval, so it covers
+    when that does (a trial whose mean total is at or below 0, 16 % of them at 1.0,
+    has no ratio; it is judged by the reference's interval, whose part above 0 the
+    ratio's unbounded interval is). The symmetric r (1 ± q σ) does as well at 1 %
+    and covers under 90 % at 0.5 and 1.0 (measured 89 % and 73 %; contrast: the
+    check tells the two apart)."""
+    rng = np.random.default_rng(7)
+    k, trials = 4, 4000
+    q = float(stdtrit(k - 1, 0.975))
+    covered = symmetric = 0
+    for _ in range(trials):
+        totals = rng.normal(1.0, 2.0 * relative, size=k)
+        mean, stderr = totals.mean(), totals.std(ddof=1) / np.sqrt(k)
+        if mean <= 0:
+            covered += abs(mean - 1.0) <= q * stderr
+            continue
+        ratio, sigma = 1.0 / mean, stderr / mean
+        low, high = ratio_interval(ratio, sigma, q)
+        covered += low <= 1.0 <= high
+        symmetric += abs(ratio - 1.0) <= q * sigma * ratio
+    assert 0.93 <= covered / trials <= 0.97, covered / trials
+    if relative < 0.05:
+        assert 0.93 <= symmetric / trials <= 0.97, symmetric / trials
+    else:
+        assert symmetric / trials < 0.90, symmetric / trials

@@ -33,6 +33,8 @@ from tests.conftest import SCENES
     ("band", 0.02, 1.0, (0.97, 1.03), "undecided"),    # wider than the band itself
     ("max", 1e-4, math.nan, (4e-5, 6e-5), "fails"),
     ("max", 1e-4, 5e-5, (math.nan, 6e-5), "fails"),
+    ("band", 0.02, 0.0, (0.0, math.inf), "undecided"),  # a reference total that may be 0
+    ("band", 0.02, 1.5, (1.1, math.inf), "fails"),      # unbounded, but wholly above
 ])
 def test_judge_reads_the_interval(kind, bound, value, interval, expected):
     assert judge(kind, bound, value, interval) == expected
