@@ -460,7 +460,8 @@ class Settings:
         None, doc="Rim patches: each grid quad within one grid step of an object's "
         "silhouette seen from the light is traced again as a patch of n x n quads (n "
         "odd; 1: none), whose splats replace the quad's; they follow the strongly "
-        "curved refraction at grazing light (preset: paper 1, strong 3).", ge=1, le=9,
+        "curved refraction and reflection at grazing light (preset: paper 1, strong 3, "
+        "5 where the scene has a conductor).", ge=1, le=9,
     )
     frustum: Literal["square", "tight"] | None = spec(
         None, doc="Object view of the vertex grid: a square frustum around the objects' "

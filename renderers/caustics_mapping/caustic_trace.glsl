@@ -64,7 +64,10 @@ uniform sampler2D u_front_geometric;      // object atlas: the triangles' geomet
 uniform sampler2D u_back_positions;      // object atlas at u_back_size texels per view
 uniform sampler2D u_back_normals;
 uniform sampler2D u_back_geometric;
-uniform int u_crossing_direction;         // 1: crosses_layer's direction test
+uniform int u_depth_spread;               // 1: reflection_blocked and under_contact allow
+                                          // for depth_spread (TraceOptions.depth_spread)
+uniform int u_open_escape;
+uniform int u_box_samples;                // 1: stays_in_front's escape (TraceOptions)
 uniform int u_shading_correction;         // 1: Veach's adjoint shading-normal factor
 uniform int u_grid;
 uniform int u_front_stride;     // front-atlas texels per grid step (odd)
@@ -343,14 +346,21 @@ bool surface_depth(sampler2D positions, int size, int stride, vec3 x, int object
 // the light than the box fails the exit surface's depth). So the test's outcome is
 // the same, at about a sixth of the samples on the bunny's exit rays (bunny strong:
 // trace 15.6 -> 9.3 ms on llvmpipe; records unchanged).
-int reentry_samples(vec3 e, vec3 r, int object, float len, float view) {
+// Where (m along r) the ray e + s r leaves `object`'s bounding box grown by one
+// object-atlas texel width at its farthest point from the light (`view`: the object
+// view's larger extent).
+float box_exit(vec3 e, vec3 r, int object, float view) {
     vec3 lo = u_bound_lo[object], hi = u_bound_hi[object];
     float far = u_obj_persp == 1 ? length(0.5 * (lo + hi) - u_light_pos) + 0.5 * length(hi - lo)
                                  : 1.0;
     vec3 grown = vec3(view / float(u_grid) * far);
     vec3 t1 = (lo - grown - e) / r, t2 = (hi + grown - e) / r;   // +-inf where r's axis is 0
     vec3 leave = max(t1, t2);
-    float t = min(min(leave.x, leave.y), leave.z);             // where the ray leaves the box
+    return min(min(leave.x, leave.y), leave.z);
+}
+
+int reentry_samples(vec3 e, vec3 r, int object, float len, float view) {
+    float t = box_exit(e, r, object, view);
     return int(clamp(floor(t / len * float(REENTRY_STEPS)), 0.0, float(REENTRY_STEPS)));
 }
 
@@ -374,15 +384,30 @@ bool reenters(vec3 e, vec3 r, int object) {
     return false;
 }
 
+// How far (m) a surface seen through a texel may lie from the light, nearer or
+// farther than the texel centre's point, at a point within that texel: its depth
+// change over half the texel's diagonal plus a quarter texel for rounding,
+// w (0.7071 tan(theta) + 0.25), w the texel width there, theta the angle between the
+// surface normal and the light (c = |cos theta|). A sample whose depth differs from
+// the texel's point by less cannot be told in front of the surface or behind it.
+float depth_spread(float c, float w) {
+    return w * (0.7071 * sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-3) + 0.25);
+}
+
 // One layer of a reflection_blocked test: the sample x's side of the layer's surface
-// seen through its texel (nearest), and whether the ray (direction r) crossed that
-// surface since the last sample that saw it (`s_prev`, `f_prev`, `n_prev`: its side,
-// the surface point and normal seen; `have_prev`: whether there is one). `edge`: a
+// seen through its texel (nearest), and whether the ray crossed that surface since
+// the last sample that saw it (`s_prev`, `f_prev`, `n_prev`: its side, the surface
+// point and normal seen; `have_prev`: whether there is one). `edge`: a
 // sample whose texel shows no object, after one behind an edge-on sheet (|cos| to the
-// light below GRAZING), left through that sheet (see reflection_blocked).
-bool crosses_layer(sampler2D positions, sampler2D normals, int stride, bool edge, vec3 x,
-                   vec3 r, int object, float step, float w, inout float s_prev,
-                   inout vec3 f_prev, inout vec3 n_prev, inout bool have_prev) {
+// light below GRAZING), left through that sheet (see reflection_blocked); `last`: the
+// normal and side of the last sample that saw the layer, zero after one that saw
+// none. With u_depth_spread, a sample behind the surface by no more than its
+// depth_spread is not taken as behind it, nor as a crossing (`hit`: the sample is the
+// ray's hit itself, which is taken whatever its depth).
+bool crosses_layer(sampler2D positions, sampler2D normals, int stride, bool edge, bool hit,
+                   vec3 x, int object, float step, float w, inout float s_prev,
+                   inout vec3 f_prev, inout vec3 n_prev, inout bool have_prev,
+                   inout vec4 last) {
     int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
     vec2 ndc;
     vec4 f = vec4(0.0);
@@ -393,25 +418,31 @@ bool crosses_layer(sampler2D positions, sampler2D normals, int stride, bool edge
         f = texelFetch(positions, t, 0);
     }
     if (abs(f.w - float(object + 1)) >= 0.5) {
-        bool left = edge && have_prev && s_prev > 0.0
-            && abs(dot(n_prev, incident_dir(x))) < GRAZING;
+        bool left = edge && dot(last.xyz, last.xyz) > 0.0 && last.w > 0.0
+            && abs(dot(last.xyz, incident_dir(x))) < GRAZING;
         have_prev = false;
+        last = vec4(0.0);
         return left;
     }
     vec3 n = texelFetch(normals, t, 0).xyz;
     float s = light_distance(x) - light_distance(f.xyz);   // > 0: behind it from the light
+    last = vec4(n, s);
+    // Where the ray runs within a texel of a sheet, behind it by less than the
+    // sheet's depth spread, the texel's point may lie either side of the ray: such a
+    // sample leaves the side last taken as it was. A sheet seen nearly edge-on
+    // spreads over centimetres in a texel, and grazing reflections leaving a bowl's
+    // convex outer wall run along it within a texel of the light's silhouette,
+    // reading a millimetre behind one texel's point and well in front of the next
+    // one's (1.0 % of bowl_deep_sun75's floor flux was ended so, their exact rays
+    // reaching the floor; a rule on the ray's direction through the sheet, which
+    // this leaves nothing to do, is gone). The hit is taken as read: a ray that
+    // meets the object within a texel of the receiver (a bowl's bottom on the floor)
+    // shows its crossing only there.
+    if (u_depth_spread == 1 && !hit && s > 0.0
+        && s <= depth_spread(abs(dot(n, incident_dir(f.xyz))), w))
+        return false;
     bool crossed = have_prev && (s > 0.0) != (s_prev > 0.0) && dot(n, n_prev) > 0.5
         && abs(dot(f.xyz - f_prev, n_prev)) <= SHEET_STEPS * step + 2.0 * w;
-    // A ray that passes from the lit side of a sheet to behind it runs against the
-    // sheet's light-facing normal (r . n < 0), and one passing back runs with it. A
-    // sign change of s that the ray's direction contradicts is the texels' rounding
-    // on a sheet seen nearly edge-on, whose depth changes by about w / |cos| across
-    // a texel: grazing reflections leaving the convex outer wall of a bowl run along
-    // the light's silhouette within a texel of it (TraceOptions.crossing_direction).
-    if (crossed && u_crossing_direction == 1) {
-        vec3 lit = dot(n, incident_dir(f.xyz)) < 0.0 ? n : -n;
-        crossed = s > 0.0 ? dot(r, lit) < 0.0 : dot(r, lit) > 0.0;
-    }
     s_prev = s;
     f_prev = f.xyz;
     n_prev = n;
@@ -445,19 +476,23 @@ bool crosses_layer(sampler2D positions, sampler2D normals, int stride, bool edge
 // (metal_ring).
 bool reflection_blocked(vec3 v, vec3 r, float d, int object, bool edge) {
     float view = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z);
-    float step = d / float(REENTRY_STEPS);  // the last sample is the hit itself
+    float len = u_box_samples == 1 ? min(d, box_exit(v, r, object, view)) : d;
+    float step = len / float(REENTRY_STEPS);  // the last sample is the hit, or leaves the box
     float s_front = 0.0, s_far = 0.0;
     vec3 f_front = vec3(0.0), n_front = vec3(0.0), f_far = vec3(0.0), n_far = vec3(0.0);
+    vec4 last_front = vec4(0.0), last_far = vec4(0.0);
     bool have_front = false, have_far = false;
     for (int k = 1; k <= REENTRY_STEPS; ++k) {
         vec3 x = v + (step * float(k)) * r;
         float w = view / float(u_grid) * (u_obj_persp == 1 ? length(x - u_light_pos) : 1.0);
         if (step * float(k) < 2.0 * w) continue;
-        if (crosses_layer(u_front_positions, u_front_normals, u_front_stride, edge, x,
-                          r, object, step, w, s_front, f_front, n_front, have_front))
+        bool hit = k == REENTRY_STEPS && len == d;
+        if (crosses_layer(u_front_positions, u_front_normals, u_front_stride, edge, hit, x,
+                          object, step, w, s_front, f_front, n_front, have_front, last_front))
             return true;
-        if (u_has_far == 1 && crosses_layer(u_far_positions, u_far_normals, 1, false, x,
-                                            r, object, step, w, s_far, f_far, n_far, have_far))
+        if (u_has_far == 1 && crosses_layer(u_far_positions, u_far_normals, 1, false, hit, x,
+                                            object, step, w, s_far, f_far, n_far, have_far,
+                                            last_far))
             return true;
     }
     return false;
@@ -558,29 +593,67 @@ bool reflected_search(vec3 v, vec3 r, out float d) {
 // (bowl_sun: flux ratio 1.05 with them). A ray that passes behind a surface the light
 // sees without meeting it (under a bowl's rim seen from the light) fails the test too
 // and stays unconverged: measured in the flux budget's "estimator failed" share.
+// With u_open_escape, a ray behind a sheet the light does not see edge-on (|cos| at
+// least GRAZING) that then leaves the objects' silhouette, or their bounding box,
+// before it comes back in front has left through an opening, as through a
+// half-pipe's open end under its near wall's shadow (halfpipe_sun20: 1.7 % of the
+// floor's flux, all of it from the far inside wall). Behind an edge-on sheet, or
+// back in front within the box, the ray may have crossed it and fails as before.
 const int FRONT_STEPS = 96;
 bool stays_in_front(vec3 v, vec3 r, float d, int object) {
     float view = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z);
     float len = min(d, float(reentry_samples(v, r, object, d, view)) / float(REENTRY_STEPS) * d
                        + d / float(REENTRY_STEPS));
     float step = len / float(FRONT_STEPS);
+    bool behind = false, seen = false, outside = false;
+    float behind_cos = 0.0;
+    vec3 f_prev = vec3(0.0), n_prev = vec3(0.0);   // the last in-front sample's surface
     for (int k = 1; k <= FRONT_STEPS; ++k) {
         vec3 x = v + (step * float(k)) * r;
         float w = view / float(u_grid) * (u_obj_persp == 1 ? length(x - u_light_pos) : 1.0);
         if (step * float(k) < 2.0 * w) continue;
         int face = u_obj_cube == 1 ? cube_face(x - u_light_pos) : 0;
         vec2 ndc;
-        if (!project(u_obj_vp[face], x, ndc)) continue;
-        if (any(greaterThan(abs(ndc), vec2(1.0)))) continue;
-        ivec2 t = atlas_texel(face, min(ivec2(floor((ndc * 0.5 + 0.5) * float(u_grid))),
-                                        ivec2(u_grid - 1)), u_grid, u_front_stride);
-        vec4 f = texelFetch(u_front_positions, t, 0);
-        if (f.w < 0.5) continue;
-        float c = abs(dot(texelFetch(u_front_normals, t, 0).xyz, incident_dir(x)));
+        vec4 f = vec4(0.0);
+        ivec2 t = ivec2(0);
+        if (project(u_obj_vp[face], x, ndc) && all(lessThanEqual(abs(ndc), vec2(1.0)))) {
+            t = atlas_texel(face, min(ivec2(floor((ndc * 0.5 + 0.5) * float(u_grid))),
+                                      ivec2(u_grid - 1)), u_grid, u_front_stride);
+            f = texelFetch(u_front_positions, t, 0);
+        }
+        if (f.w < 0.5) {                // off the silhouette: left it, or failed
+            if (behind && behind_cos < GRAZING) return false;
+            behind = seen = false;
+            outside = true;
+            continue;
+        }
+        vec3 n = texelFetch(u_front_normals, t, 0).xyz;
+        float c = abs(dot(n, incident_dir(x)));
         float slope = min(sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-3), 10.0);
-        if (light_distance(x) > light_distance(f.xyz) + w * (0.5 * slope + 0.25)) return false;
+        bool back = light_distance(x) > light_distance(f.xyz) + w * (0.5 * slope + 0.25);
+        if (back && u_open_escape == 0) return false;
+        if (!back && behind) return false;
+        // Behind from the first sample, or from in front of the same sheet (as
+        // reflection_blocked tells one sheet: normals within 60 deg, the point within
+        // SHEET_STEPS steps plus 2 texels of the tangent plane): through it. Only
+        // passing under an edge of the image, from off the silhouette or from a
+        // farther sheet to one nearer the light, is not.
+        if (back && !behind && !outside && (!seen || (dot(n, n_prev) > 0.5
+                && abs(dot(f.xyz - f_prev, n_prev)) <= SHEET_STEPS * step + 2.0 * w)))
+            return false;
+        if (back) {
+            behind = true;
+            behind_cos = c;
+        } else {
+            seen = true;
+            f_prev = f.xyz;
+            n_prev = n;
+        }
+        outside = false;
     }
-    return true;
+    // Still behind at the last sample: through the box's side when the samples stopped
+    // short of the hit (len < d), as above.
+    return !behind || (behind_cos >= GRAZING && len < d);
 }
 
 // Whether the hit p on a receiver of normal `normal` lies where `object` rests on the
@@ -588,10 +661,13 @@ bool stays_in_front(vec3 v, vec3 r, float d, int object) {
 // at p's texel, its surface within 30 deg of parallel to the receiver, and the
 // surface's tangent plane there meets the light ray through p within a quarter texel
 // width w of p (the plane carries the texel centre's point over to p's own light ray,
-// exactly on a flat facet). Light cannot reach such a point but through the object: a
-// bowl's bottom on the floor, where reflections off the inside meet the bowl within
-// millimetres of the floor, closer than the object images resolve (reflection_blocked
-// sees no crossing there).
+// exactly on a flat facet), or with u_depth_spread within the surface's depth_spread
+// (the tangent plane of a curved bottom strays from it by that much across a texel).
+// Light cannot reach such a point but through the object: a bowl's bottom on the
+// floor, where reflections off the inside meet the bowl within millimetres of the
+// floor, closer than the object images resolve (reflection_blocked sees no crossing
+// there; with its depth spread, none a few centimetres out from the contact either:
+// bowl_shallow_sun45, 1.4 % of the floor's flux splatted so with the quarter texel).
 bool under_contact(vec3 p, vec3 normal, int object) {
     int face = u_obj_cube == 1 ? cube_face(p - u_light_pos) : 0;
     vec2 ndc;
@@ -608,7 +684,7 @@ bool under_contact(vec3 p, vec3 normal, int object) {
     float gap = dot(p - f.xyz, m) / c;        // from the plane to p along the light ray (m)
     float view = max(u_obj_rect.y - u_obj_rect.x, u_obj_rect.w - u_obj_rect.z);
     float w = view / float(u_grid) * (u_obj_persp == 1 ? length(p - u_light_pos) : 1.0);
-    return abs(gap) <= 0.25 * w;
+    return abs(gap) <= (u_depth_spread == 1 ? depth_spread(abs(c), w) : 0.25 * w);
 }
 
 // The status of the estimate d on the ray v + d r (n: the surface normal at v, facing

@@ -77,12 +77,21 @@ class TraceOptions:
         (the shading normal tilted past the geometric one near grazing) meets its
         object again, as the reference's photon does, and ends as ``reentered``
         (``below_own_triangle`` in ``caustic_trace.glsl``); on with verified hits.
-    crossing_direction : bool
-        The reflected ray's crossing test (``reflection_blocked``) counts a sign
-        change of the depth difference as a crossing only where the ray's direction
-        agrees with it (from the lit side to behind a sheet: against the sheet's
-        light-facing normal; ``crosses_layer`` in ``caustic_trace.glsl``); on with
+    depth_spread : bool
+        The crossing test (``reflection_blocked``) takes a sample behind a sheet by
+        no more than the sheet's depth spread across half a texel
+        (``depth_spread`` in ``caustic_trace.glsl``) as on neither side, but for the
+        hit itself; the contact test (``under_contact``) takes that spread as its
+        tolerance; on with verified hits.
+    open_escape : bool
+        The reflected search's stricter test (``stays_in_front``) lets a ray pass
+        behind a sheet the light does not see edge-on when it then leaves the
+        objects' silhouette or bounding box (a half-pipe's open end); on with
         verified hits.
+    box_samples : bool
+        The crossing test's samples run over the ray's part inside the object's
+        bounding box (grown by a texel), not to its hit: past the box no surface of
+        the object is seen; on with verified hits.
     shading_correction : bool
         Veach's adjoint shading-normal factor at every specular event (entry, exit),
         |d . n_s| |d' . n_g| / (|d . n_g| |d' . n_s|), as the reference's photons
@@ -103,7 +112,9 @@ class TraceOptions:
     reflected_search: bool = False
     contact_test: bool = False
     facet_side_test: bool = False
-    crossing_direction: bool = False
+    depth_spread: bool = False
+    open_escape: bool = False
+    box_samples: bool = False
     shading_correction: bool = False
 
 
@@ -126,7 +137,8 @@ def trace_options(settings, eps: float) -> TraceOptions:
         converged=CONVERGED if settings.safeguarded else 0.0,
         reflected_search=bool(settings.verify_hits), contact_test=bool(settings.verify_hits),
         facet_side_test=bool(settings.verify_hits),
-        crossing_direction=bool(settings.verify_hits),
+        depth_spread=bool(settings.verify_hits), open_escape=bool(settings.verify_hits),
+        box_samples=bool(settings.verify_hits),
         shading_correction=settings.preset == "strong")
 #: Largest number of caustic objects one render handles.
 MAX_OBJECTS = 8
@@ -324,7 +336,9 @@ def run_caustic_trace(
         ("u_reflected_search", int(options.reflected_search)),
         ("u_contact_test", int(options.contact_test)),
         ("u_facet_side", int(options.facet_side_test)),
-        ("u_crossing_direction", int(options.crossing_direction)),
+        ("u_depth_spread", int(options.depth_spread)),
+        ("u_open_escape", int(options.open_escape)),
+        ("u_box_samples", int(options.box_samples)),
         ("u_shading_correction", int(options.shading_correction)),
     ):
         set_uniform(program, name, value)

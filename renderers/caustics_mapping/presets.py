@@ -23,7 +23,8 @@ A setting the scene file or the command line gives always wins; a setting left a
   webgl-water), which measured better than footprint Gaussians (caustic relMSE
   0.0009 against 0.0019 on glass_sphere), with rim patches of 3 x 3 (the quads at
   the silhouette traced again, finer: whole-receiver excess relMSE on glass_sphere
-  5.6e-4 -> 2.4e-4, metal_ring's caustic region 1.3e-2 -> 2.2e-3; docs/method.md).
+  5.6e-4 -> 2.4e-4, metal_ring's caustic region 1.3e-2 -> 2.2e-3; docs/method.md),
+  5 x 5 where the scene has a conductor (:data:`_CONDUCTOR_RIM_PATCHES`).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import dataclasses
 from renderers.caustics_mapping.meshes import convex
 from scenes import Scene
 from scenes.geometry import SceneGeometry, build_geometry
-from scenes.model import DielectricMaterial, Settings
+from scenes.model import ConductorMaterial, DielectricMaterial, Settings
 
 __all__ = ["PRESETS", "resolve_scene", "resolve_settings"]
 
@@ -55,21 +56,37 @@ _BACK_FACTOR = {"paper": 1, "strong": 4}
 #: for 8 ms less a frame on llvmpipe. The bunny's folds need 4x (2x: caustic excess
 #: 0.0930 -> 0.0955).
 _CONVEX_BACK_FACTOR = 2
+#: strong's rim patches where the scene has a conductor. A mirror's reflection turns
+#: twice as fast as its normal, so near grazing its rays fan out twice as fast as a
+#: refraction's across the same patch (``rim_patches.py``). Against the cached
+#: references of ``compare``'s default budgets (each scene's own settings, llvmpipe),
+#: the caustic region's excess relMSE with patches of 3 -> 5: metal_ring 2.12e-3 ->
+#: 1.58e-3, ring_point 2.85e-3 -> 1.98e-3, bowl_sun 1.98e-2 -> 1.77e-2, cup_sun
+#: 6.98e-3 -> 7.00e-3 (intervals overlap); and the shallow bowl under a 45 deg sun
+#: (scenes/hard/concave), whose floor light comes from a sliver under one grid step
+#: wide, flux ratio 0.977 -> 0.9995 (grid 128). A frame takes 1.46 to 1.61 times as
+#: long (tests/benchmarks/test_bench_conductor_patches.py).
+_CONDUCTOR_RIM_PATCHES = 5
 
 
-def resolve_settings(settings: Settings, *, convex_bodies: bool = False) -> Settings:
+def resolve_settings(settings: Settings, *, convex_bodies: bool = False,
+                     conductors: bool = False) -> Settings:
     """``settings`` with every unset (``None``) choice filled from its preset.
 
     ``splat_sigma`` stays ``None`` outside the paper preset: the renderer then derives
     it from the hits (one mean spacing of neighbouring hits, in caustic-map texels).
     ``convex_bodies``: every closed dielectric of the scene bounds a convex body (strong's
-    exit surface is then at 2x the grid, else at 4x); :func:`resolve_scene` finds it.
+    exit surface is then at 2x the grid, else at 4x); ``conductors``: the scene has a
+    conductor (strong's rim patches are then :data:`_CONDUCTOR_RIM_PATCHES`);
+    :func:`resolve_scene` finds both.
     """
     preset = settings.preset
     values = {k: v for k, v in PRESETS[preset].items() if getattr(settings, k) is None}
     if settings.rim_patches is None and (settings.normalization == "paper"
                                          or values.get("splat", settings.splat) != "triangles"):
         values["rim_patches"] = 1       # patches replace triangles; Eq. 6 counts grid texels
+    elif settings.rim_patches is None and conductors and preset == "strong":
+        values["rim_patches"] = _CONDUCTOR_RIM_PATCHES
     if settings.back_resolution is None:
         factor = _BACK_FACTOR[preset]
         if convex_bodies and preset == "strong":
@@ -95,4 +112,6 @@ def resolve_scene(scene: Scene, geometry: SceneGeometry | None = None) -> Scene:
     bodies = False
     if settings.back_resolution is None and settings.preset == "strong":
         bodies = convex_exits(geometry or build_geometry(scene))
-    return dataclasses.replace(scene, settings=resolve_settings(settings, convex_bodies=bodies))
+    conductors = any(isinstance(o.material, ConductorMaterial) for o in scene.objects)
+    return dataclasses.replace(scene, settings=resolve_settings(
+        settings, convex_bodies=bodies, conductors=conductors))

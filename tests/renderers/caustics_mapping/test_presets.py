@@ -65,6 +65,20 @@ def test_strong_exit_surface_is_finer_where_a_body_is_not_convex(name, factor):
     assert resolve_scene(paper).settings.back_resolution == scene.settings.grid
 
 
+@pytest.mark.parametrize(("name", "factor"), [("metal_ring", 5), ("bowl_sun", 5),
+                                            ("glass_sphere", 3), ("water_pool", 3)])
+def test_strong_rim_patches_are_finer_where_the_scene_has_a_conductor(name, factor):
+    """Regression lock of the rim-patch rule (presets.py, ``_CONDUCTOR_RIM_PATCHES``):
+    patches of 5 where the scene has a conductor (metal_ring, bowl_sun), 3 elsewhere
+    (a sphere, water); a rim_patches the scene gives still wins, and the paper preset
+    has none."""
+    scene = with_settings(load_scene(SCENES / f"{name}.toml"), {"preset": "strong"})
+    assert resolve_scene(scene).settings.rim_patches == factor
+    assert resolve_scene(with_settings(scene, {"rim_patches": 7})).settings.rim_patches == 7
+    paper = with_settings(scene, {"preset": "paper"})
+    assert resolve_scene(paper).settings.rim_patches == 1
+
+
 def test_strong_sphere_exit_surface_at_twice_the_grid_in_the_render(ctx):
     """Regression lock: the frame's metadata records the exit surface it rendered,
     2x the grid on a sphere under the strong preset."""
@@ -96,7 +110,8 @@ def test_every_splat_kernel_keeps_the_vertices_flux(ctx, name, splat):
 def test_tight_frustum_spends_twice_the_grid_on_the_bunny(ctx):
     """Method target (4,753 of 128^2 grid vertices land on the bunny under the
     square frustum around its bounding sphere; the tight one must at least double
-    that). Measured: 4,753 -> 9,813 (2.06x)."""
+    that). Measured: 4,753 -> 9,813 (2.06x) without the tight view's border of half
+    a texel (``lights._tight_rect``), 9,651 (2.03x) with it."""
     def on_object(frustum):
         frame = render_frame(_scene("bunny", frustum=frustum, grid=128), ctx=ctx)
         return int(np.sum(frame.hits["status"] != STATUS["empty"]))
