@@ -12,8 +12,6 @@ only on a broken render, or where the band patches no more quads than the silhou
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 
@@ -22,7 +20,7 @@ from renderers.methods import load_method
 from scenes import load_scene
 
 from ..renderers.caustics_mapping.conftest import ROOT
-from .test_bench_presets import ROUNDS, median_interval
+from .test_bench_presets import alternating_frames, print_ratio
 
 
 @pytest.mark.bench
@@ -30,25 +28,18 @@ from .test_bench_presets import ROUNDS, median_interval
 def test_bench_grazing_band(ctx, monkeypatch, name):
     scene = load_method("strong").configure(load_scene(ROOT / "scenes" / f"{name}.toml"))
     band = {"off": 0.0, "on": rim_patches.GRAZING_COS}
-    quads, frames = {}, {key: [] for key in band}
+    quads = {}
     for key, cos in band.items():
         monkeypatch.setattr(rim_patches, "GRAZING_COS", cos)
         quads[key] = len(np.unique(render_frame(scene, ctx=ctx).patches["quad"]))
         render(scene, ctx=ctx)
     assert quads["on"] > quads["off"]
-    for _ in range(ROUNDS):
-        for key, cos in band.items():
-            monkeypatch.setattr(rim_patches, "GRAZING_COS", cos)
-            start = time.perf_counter()
-            result = render(scene, ctx=ctx)
-            frames[key].append((time.perf_counter() - start) * 1e3)
-            assert np.isfinite(result.receivers[0].irradiance).all()
-    ratios = np.asarray(frames["on"]) / np.asarray(frames["off"])
-    low, high, coverage = median_interval(ratios)
-    print(f"\n{name}: strong with the grazing band off and on, {ROUNDS} alternating rounds "
-          "after a warm-up each (time.perf_counter around render())")
-    for key in band:
-        print(f"  band {key:3s}: {quads[key]:5d} patched quads, frame "
-              f"{np.median(frames[key]):7.1f} ms (median, min {np.min(frames[key]):.1f})")
-    print(f"  on / off: {np.median(ratios):.3f} (median of per-round ratios; [{low:.3f}, "
-          f"{high:.3f}] holds the median with probability {coverage:.3f})")
+
+    def render_with(key):
+        monkeypatch.setattr(rim_patches, "GRAZING_COS", band[key])
+        return render(scene, ctx=ctx)
+
+    frames = alternating_frames(band, render_with)
+    print_ratio(f"{name}: strong with the grazing band off and on", frames,
+                {key: f"band {key:3s}: {quads[key]:5d} patched quads" for key in band},
+                over=("on", "off"))

@@ -61,6 +61,37 @@ def bound_verdict(low: float, high: float, bound: float) -> str:
     return "undecided (the interval holds values on both sides)"
 
 
+def alternating_frames(keys, render_one) -> dict:
+    """``ROUNDS`` rounds, each rendering every key of ``keys`` once in order
+    (``render_one(key)`` returns the RenderResult), so that drift of the machine
+    falls on all alike: per key the frames (ms, ``time.perf_counter`` around the
+    call). Each render must be finite."""
+    frames = {key: [] for key in keys}
+    for _ in range(ROUNDS):
+        for key in keys:
+            start = time.perf_counter()
+            result = render_one(key)
+            frames[key].append((time.perf_counter() - start) * 1e3)
+            assert np.isfinite(result.receivers[0].irradiance).all()
+    return frames
+
+
+def print_ratio(title: str, frames: dict, counts: dict, *, over: tuple) -> None:
+    """Print ``title``, each key's count line (``counts``: key -> text) with its
+    median and least frame, and the median per-round ratio ``over`` = (numerator key,
+    denominator key) with its distribution-free 95 % interval."""
+    print(f"\n{title}, {ROUNDS} alternating rounds after a warm-up each "
+          "(time.perf_counter around render())")
+    for key, text in counts.items():
+        print(f"  {text}, frame {np.median(frames[key]):7.1f} ms (median, min "
+              f"{np.min(frames[key]):.1f})")
+    top, bottom = over
+    ratios = np.asarray(frames[top]) / np.asarray(frames[bottom])
+    low, high, coverage = median_interval(ratios)
+    print(f"  {top} / {bottom}: {np.median(ratios):.3f} (median of per-round ratios; "
+          f"[{low:.3f}, {high:.3f}] holds the median with probability {coverage:.3f})")
+
+
 @functools.cache
 def _median_order(n: int, level: float) -> tuple[int, float]:
     """(k, coverage) of :func:`median_interval` for ``n`` values."""

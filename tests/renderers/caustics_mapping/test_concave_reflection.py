@@ -206,6 +206,20 @@ def _exact_changes(scene, geometry, on, off):
     return out
 
 
+def _gains_floor_light(context_factory, monkeypatch, name, option):
+    """:func:`_exact_changes` of ``option`` on the member ``name``, having checked
+    that the vertices it splats carry at least 1 % of the floor's flux whose exact
+    rays reach the floor, and meet the object first for at most
+    ``ESTIMATOR_FAILED_BOUND`` of it (the allowance for light the method wrongly
+    splats or drops)."""
+    scene, geometry, on, off = _with_and_without(context_factory, monkeypatch, name, option)
+    fate = _exact_changes(scene, geometry, on, off)
+    floor = fate["floor"]
+    assert fate["gained floor"] >= 0.01 * floor, f"{fate['gained floor'] / floor:.4f}"
+    assert fate["gained object"] <= ESTIMATOR_FAILED_BOUND * floor
+    return fate
+
+
 @pytest.mark.physical_requirement
 def test_the_depth_spread_keeps_grazing_light_and_ends_light_at_the_contact(context_factory,
                                                                           monkeypatch):
@@ -221,13 +235,9 @@ def test_the_depth_spread_keeps_grazing_light_and_ends_light_at_the_contact(cont
     splats (reflections off the inside landing a few centimetres from where the bowl
     rests on the floor) reach the floor first for at most 1 % of it (measured 0) and
     meet the bowl for some of it (measured 0.5 %)."""
-    scene, geometry, on, off = _with_and_without(context_factory, monkeypatch,
-                                                 "bowl_shallow_sun45", "depth_spread")
-    fate = _exact_changes(scene, geometry, on, off)
-    floor = fate["floor"]
-    assert fate["gained floor"] >= 0.01 * floor, f"{fate['gained floor'] / floor:.4f}"
-    assert fate["gained object"] <= ESTIMATOR_FAILED_BOUND * floor
-    assert fate["lost floor"] <= ESTIMATOR_FAILED_BOUND * floor
+    fate = _gains_floor_light(context_factory, monkeypatch, "bowl_shallow_sun45",
+                              "depth_spread")
+    assert fate["lost floor"] <= ESTIMATOR_FAILED_BOUND * fate["floor"]
     assert fate["lost object"] > 0
 
 
@@ -241,12 +251,7 @@ def test_a_reflection_under_the_near_wall_leaves_by_the_open_end(context_factory
     floor's flux (measured 1.6 %: without them the flux ratio was 0.985), and meet the
     pipe first for at most 1 % of the floor's flux (``ESTIMATOR_FAILED_BOUND``;
     measured 0.015 %); no vertex it leaves alone changes."""
-    scene, geometry, on, off = _with_and_without(context_factory, monkeypatch,
-                                                 "halfpipe_sun20", "open_escape")
-    fate = _exact_changes(scene, geometry, on, off)
-    floor = fate["floor"]
-    assert fate["gained floor"] >= 0.01 * floor, f"{fate['gained floor'] / floor:.4f}"
-    assert fate["gained object"] <= ESTIMATOR_FAILED_BOUND * floor
+    fate = _gains_floor_light(context_factory, monkeypatch, "halfpipe_sun20", "open_escape")
     assert fate["lost object"] + fate["lost floor"] == 0
 
 
