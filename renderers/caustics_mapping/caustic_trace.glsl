@@ -66,8 +66,8 @@ uniform sampler2D u_back_normals;
 uniform sampler2D u_back_geometric;
 uniform int u_depth_spread;               // 1: reflection_blocked and under_contact allow
                                           // for depth_spread (TraceOptions.depth_spread)
-uniform int u_open_escape;
-uniform int u_box_samples;                // 1: stays_in_front's escape (TraceOptions)
+uniform int u_open_escape;                // 1: stays_in_front's escape (TraceOptions)
+uniform int u_box_samples;                // 1: reflection_blocked samples within the box
 uniform int u_shading_correction;         // 1: Veach's adjoint shading-normal factor
 uniform int u_grid;
 uniform int u_front_stride;     // front-atlas texels per grid step (odd)
@@ -467,7 +467,11 @@ bool crosses_layer(sampler2D positions, sampler2D normals, int stride, bool edge
 // ray behind an edge-on front sheet whose next sample sees no object has crossed it.
 // (A grazing reflection runs along its sheet, behind it by the texels' rounding, and
 // leaves the silhouette without crossing anything: bowl_sun's rim.)
-// REENTRY_STEPS samples up to the hit itself; those within 2 w of v are skipped (the
+// REENTRY_STEPS samples up to the hit itself, or with u_box_samples up to where the
+// ray leaves the object's bounding box grown by a texel if that comes first (past it
+// no surface of the object is seen; spread over a 7 m ray the samples were 14 cm
+// apart and missed crossings near the outline: bowl_shallow_sun60's rim); those
+// within 2 w of v are skipped (the
 // ray still leaves its own sheet's rounded depths). The chain L S D ends at the
 // object, as the reference's does: 19 % of cup_sun's splatted flux, 52 % of
 // bowl_sun's, came from rays that meet the object again. Against exact ray casts of
@@ -596,7 +600,7 @@ bool reflected_search(vec3 v, vec3 r, out float d) {
 // With u_open_escape, a ray behind a sheet the light does not see edge-on (|cos| at
 // least GRAZING) that then leaves the objects' silhouette, or their bounding box,
 // before it comes back in front has left through an opening, as through a
-// half-pipe's open end under its near wall's shadow (halfpipe_sun20: 1.7 % of the
+// half-pipe's open end under its near wall's shadow (halfpipe_sun20: 1.6 % of the
 // floor's flux, all of it from the far inside wall). Behind an edge-on sheet, or
 // back in front within the box, the ray may have crossed it and fails as before.
 const int FRONT_STEPS = 96;
@@ -667,7 +671,7 @@ bool stays_in_front(vec3 v, vec3 r, float d, int object) {
 // floor, where reflections off the inside meet the bowl within millimetres of the
 // floor, closer than the object images resolve (reflection_blocked sees no crossing
 // there; with its depth spread, none a few centimetres out from the contact either:
-// bowl_shallow_sun45, 1.4 % of the floor's flux splatted so with the quarter texel).
+// bowl_shallow_sun45, 0.5 % of the floor's flux splatted so with the quarter texel).
 bool under_contact(vec3 p, vec3 normal, int object) {
     int face = u_obj_cube == 1 ? cube_face(p - u_light_pos) : 0;
     vec2 ndc;
