@@ -3,7 +3,8 @@
 simulation under photon noise whose texels anticorrelate (a fixed photon count per seed,
 as stratified emission gives); and the flux ratio's interval
 (``harness.checks.physical.ratio_interval``), whose coverage holds where the reference's
-total is as noisy as its mean. Kind: physical requirement on the check's statistics."""
+total is as noisy as its mean, and under weighted Poisson photon counts. Kind: physical
+requirement on the check's statistics."""
 
 from __future__ import annotations
 
@@ -98,3 +99,37 @@ def test_the_ratio_interval_covers_the_true_ratio_however_noisy_the_reference(re
         assert 0.93 <= symmetric / trials <= 0.97, symmetric / trials
     else:
         assert symmetric / trials < 0.90, symmetric / trials
+
+
+@pytest.mark.parametrize("photons", [400, 10])
+def test_the_ratio_interval_covers_the_true_ratio_under_weighted_photon_noise(photons):
+    """Photon-like noise: each of 4 seeds lands a Poisson number of photons (mean
+    ``photons``) on an 8 × 8 map, each carrying a weight drawn from a gamma of mean 1
+    and shape 4 (a photon's throughput varies with its path), so the total is 1 W in
+    expectation. The method's total is 1 W. The ratio's interval, from the per-seed
+    totals (``seed_flux_interval``) and ``ratio_interval``, covers the true ratio 1 in
+    93-97 % of 3,000 trials (binomial SE 0.4 %), with 400 photons a seed (relative
+    standard error of the total about 3 %) and with 10 (about 18 %). Measured 95.2 %
+    and 95.1 %."""
+    rng = np.random.default_rng(5)
+    k, trials = 4, 3000
+    q = float(stdtrit(k - 1, 0.975))
+    p = np.linspace(1.0, 3.0, 64)
+    p /= p.sum()
+    covered = judged = 0
+    for _ in range(trials):
+        counts = rng.poisson(photons * p, size=(k, 64))
+        # a sum of n gamma(4, 1/4) weights is gamma(4 n, 1/4); 0 for no photon
+        weights = rng.gamma(4.0 * counts, 0.25)
+        per_seed = np.repeat((weights / photons / 0.01).reshape(k, 8, 8, 1), 3, axis=3)
+        m = ReceiverMap(per_seed.mean(axis=0), (0.0, 0.8, 0.0, 0.8),
+                        per_seed.var(axis=0, ddof=1) / k, seed_maps=per_seed)
+        total = m.total_flux()[0]
+        if total <= 0:
+            continue
+        relative, _ = seed_flux_interval([m])
+        low, high = ratio_interval(1.0 / total, relative[0], q)
+        judged += 1
+        covered += low <= 1.0 <= high
+    assert judged > 0.99 * trials
+    assert 0.93 <= covered / judged <= 0.97, covered / judged
