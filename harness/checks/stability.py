@@ -105,8 +105,9 @@ def search_outcomes(scene: Scene, geometry: SceneGeometry,
 
     * ``reentered_reaches_receiver_flux_fraction``: light the method's tests dropped
       that the reference counts (on ``scenes/hard/concave``'s shallow bowl under a
-      45 deg sun, 2.9 % of the floor's flux at grid 128: grazing reflections off the
-      outer wall's lit sliver, judged crossing the sheet they leave).
+      45 deg sun, 2.9 % of the floor's flux at grid 128 before the crossing test's
+      depth spread: grazing reflections off the outer wall's lit sliver, judged
+      crossing the sheet they leave; 0.0015 % of the traced flux after).
 
     Each is a share of the traced flux (the non-empty vertices', summed over
     channels; ``hits`` holds every traced vertex at its ``flux`` share, as
